@@ -1,0 +1,878 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+/* ----------------------------------------------------------------------
+   Explicit pseudo-energy conserving integrator with momentum jumps:
+   F. Marazzato, A. Ern, C. Mariotti, L. Monasse, "An explicit
+   pseudo-energy conserving time-integration scheme for Hamiltonian
+   dynamics", Comput. Methods Appl. Mech. Engrg. 347 (2019) 906-927.
+------------------------------------------------------------------------- */
+
+#include "fix_pe_jump.h"
+
+#include "angle.h"
+#include "atom.h"
+#include "bond.h"
+#include "comm.h"
+#include "dihedral.h"
+#include "domain.h"
+#include "error.h"
+#include "force.h"
+#include "group.h"
+#include "improper.h"
+#include "kspace.h"
+#include "memory.h"
+#include "modify.h"
+#include "neighbor.h"
+#include "output.h"
+#include "pair.h"
+#include "pe_jump_force_sampler.h"
+#include "pe_jump_quadrature.h"
+#include "update.h"
+
+#include <cmath>
+#include <cstring>
+
+using namespace LAMMPS_NS;
+using namespace FixConst;
+using PEJump::ForceSampler;
+using PEJump::Quadrature;
+
+static constexpr double ADAPT_GROWTH = 1.05;    // largest step growth factor per step
+static constexpr double BLOWUP = 1.0e300;       // stands for a non-finite value in reductions
+
+/* ---------------------------------------------------------------------- */
+
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
+    Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
+    fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr)
+{
+  if (narg < 3) utils::missing_cmd_args(FLERR, "fix pe_jump", error);
+
+  auto family = Quadrature::LEGENDRE;
+  int npoints = 1;
+  init_style = INIT_KICK;
+  sample_mask = ForceSampler::ALL;
+  adapt = 0;
+  adapt_eps = adapt_dtmin = adapt_dtmax = 0.0;
+
+  int iarg = 3;
+  while (iarg < narg) {
+    if (strcmp(arg[iarg], "quadrature") == 0) {
+      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, "fix pe_jump quadrature", error);
+      const std::string which = arg[iarg + 1];
+      if (which == "midpoint") {
+        family = Quadrature::LEGENDRE;
+        npoints = 1;
+        iarg += 2;
+      } else if ((which == "lobatto") || (which == "legendre")) {
+        if (iarg + 3 > narg)
+          utils::missing_cmd_args(FLERR, "fix pe_jump quadrature " + which, error);
+        npoints = utils::inumeric(FLERR, arg[iarg + 2], false, lmp);
+        family = (which == "lobatto") ? Quadrature::LOBATTO : Quadrature::LEGENDRE;
+        const int nmin = (family == Quadrature::LOBATTO) ? 2 : 1;
+        if ((npoints < nmin) || (npoints > Quadrature::MAX_POINTS))
+          error->all(FLERR, "Fix pe_jump quadrature {} needs {} to {} points, got {}", which, nmin,
+                     Quadrature::MAX_POINTS, npoints);
+        iarg += 3;
+      } else {
+        error->all(FLERR, "Unknown fix pe_jump quadrature rule: {}", which);
+      }
+    } else if (strcmp(arg[iarg], "init") == 0) {
+      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, "fix pe_jump init", error);
+      if (strcmp(arg[iarg + 1], "kick") == 0)
+        init_style = INIT_KICK;
+      else if (strcmp(arg[iarg + 1], "paper") == 0)
+        init_style = INIT_PAPER;
+      else
+        error->all(FLERR, "Unknown fix pe_jump init style: {}", arg[iarg + 1]);
+      iarg += 2;
+    } else if (strcmp(arg[iarg], "adapt") == 0) {
+      if (iarg + 4 > narg) utils::missing_cmd_args(FLERR, "fix pe_jump adapt", error);
+      adapt = 1;
+      adapt_eps = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
+      adapt_dtmin = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
+      adapt_dtmax = utils::numeric(FLERR, arg[iarg + 3], false, lmp);
+      if (adapt_eps <= 0.0) error->all(FLERR, "Fix pe_jump adapt eps must be > 0");
+      if ((adapt_dtmin <= 0.0) || (adapt_dtmax < adapt_dtmin))
+        error->all(FLERR, "Fix pe_jump adapt needs 0 < dtmin <= dtmax");
+      iarg += 4;
+    } else if (strcmp(arg[iarg], "sample") == 0) {
+      sample_mask = 0;
+      ++iarg;
+      while (iarg < narg) {
+        const int bit = ForceSampler::parse(arg[iarg]);
+        if (!bit) break;
+        sample_mask |= bit;
+        ++iarg;
+      }
+      if (!sample_mask)
+        error->all(FLERR,
+                   "Fix pe_jump sample needs one or more of pair, bond, angle, dihedral, "
+                   "improper, kspace, or all");
+    } else {
+      error->all(FLERR, "Unknown fix pe_jump keyword: {}", arg[iarg]);
+    }
+  }
+
+  rule = new Quadrature(family, npoints);
+  sampler = new ForceSampler(lmp);
+
+  time_integrate = 1;
+  scalar_flag = 1;
+  vector_flag = 1;
+  size_vector = 5;
+  global_freq = 1;
+  extscalar = 1;
+  extvector = -1;
+  extlist = new int[size_vector]{1, 1, 0, 0, 0};
+  restart_global = 1;
+  restart_peratom = 1;
+  comm_reverse = 3;
+  force_reneighbor = 1;
+  next_reneighbor = -1;
+
+  nstate = rule->has_end_nodes() ? 9 : 6;
+  nmax_work = 0;
+  started = reinit_pending = 0;
+  split_primary = use_copy = 0;
+  eflag_step = vflag_step = 0;
+  h_step = 0.0;
+  evals_step = evals_total = 0.0;
+  energy_scale = 0.0;
+  cached_step = -1;
+
+  FixPEJump::grow_arrays(atom->nmax);
+  atom->add_callback(Atom::GROW);
+  atom->add_callback(Atom::RESTART);
+}
+
+/* ---------------------------------------------------------------------- */
+
+FixPEJump::~FixPEJump()
+{
+  if (modify->get_fix_by_id(id)) {
+    atom->delete_callback(id, Atom::GROW);
+    atom->delete_callback(id, Atom::RESTART);
+  }
+  memory->destroy(vhalf);
+  memory->destroy(jump);
+  memory->destroy(fstart);
+  memory->destroy(fsum);
+  memory->destroy(fsample);
+  memory->destroy(xsave);
+  memory->destroy(fsave);
+  delete[] extlist;
+  delete rule;
+  delete sampler;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJump::setmask()
+{
+  int mask = INITIAL_INTEGRATE | PRE_REVERSE | FINAL_INTEGRATE;
+  if (adapt) mask |= END_OF_STEP;
+  return mask;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::init()
+{
+  if (utils::strmatch(update->integrate_style, "^respa"))
+    error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
+  if (atom->torque_flag)
+    error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
+               atom->atom_style);
+
+  // the force at the primary node is weighted by its quadrature weight, but
+  // forces of other fixes and of contributions that are not sampled act with
+  // weight 1, so the primary node force must then be split
+
+  const int present = sampler->present();
+  const bool remainder = (modify->n_post_force_any > 0) || ((sample_mask & present) != present);
+  const int p = rule->primary();
+  split_primary = remainder && ((rule->weight[p] != 1.0) || rule->has_end_nodes());
+  use_copy = split_primary && ((sample_mask & present) == present);
+  if (present && !(sample_mask & present) && (comm->me == 0))
+    error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
+}
+
+/* ----------------------------------------------------------------------
+   forces at the current positions q^n are known here. Start the two-step
+   scheme, or continue it if the state carried over (earlier run, restart)
+------------------------------------------------------------------------- */
+
+void FixPEJump::setup(int /*vflag*/)
+{
+  grow_work();
+  evals_step = 0.0;
+  if (!started) {
+    start_scheme(nullptr, true);
+  } else {
+    const int change = detect_velocity_change();
+    if (change == 2)
+      start_scheme("velocities were changed since the last run: restarting the two-step scheme "
+                   "from the current positions and velocities",
+                   true);
+    else if ((change == 1) && (comm->me == 0))
+      utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
+                     style);
+  }
+  if (adapt) energy_scale = fabs(pseudo_energy_now());
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::setup_pre_reverse(int eflag, int vflag)
+{
+  pre_reverse(eflag, vflag);
+}
+
+/* ----------------------------------------------------------------------
+   move from q^n to the primary quadrature node, where the Verlet loop will
+   evaluate the forces
+------------------------------------------------------------------------- */
+
+void FixPEJump::initial_integrate(int /*vflag*/)
+{
+  if (reinit_pending) start_scheme(nullptr, false);
+  reinit_pending = 0;
+
+  h_step = update->dt;
+  check_excursion();
+
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const double c = rule->node[rule->primary()] * h_step;
+
+  for (int i = 0; i < nlocal; i++)
+    if (mask[i] & groupbit) {
+      x[i][0] += c * vhalf[i][0];
+      x[i][1] += c * vhalf[i][1];
+      x[i][2] += c * vhalf[i][2];
+    }
+}
+
+/* ----------------------------------------------------------------------
+   remember which energy/virial tallies this step needs and, if the primary
+   force must be split, copy the force field part before other fixes add to it
+------------------------------------------------------------------------- */
+
+void FixPEJump::pre_reverse(int eflag, int vflag)
+{
+  eflag_step = eflag;
+  vflag_step = vflag;
+  if (!use_copy) return;
+  grow_work();
+  const int nall = atom->nlocal + atom->nghost;
+  if (nall) memcpy(&fsample[0][0], &atom->f[0][0], 3 * sizeof(double) * nall);
+}
+
+/* ----------------------------------------------------------------------
+   forces at the primary node are known: sample the other nodes, jump the
+   momenta, and move on to the end node q^{n+1}
+------------------------------------------------------------------------- */
+
+void FixPEJump::final_integrate()
+{
+  grow_work();
+  evals_step = 1.0;
+  quadrature_sum();
+
+  double **x = atom->x;
+  double **v = atom->v;
+  const double *rmass = atom->rmass;
+  const double *mass = atom->mass;
+  const int *type = atom->type;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const double h = h_step;
+  const double rest = (1.0 - rule->node[rule->primary()]) * h;
+  const double kick = 2.0 * h * force->ftm2v;
+  const int keep_start = rule->has_end_nodes();
+
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double dtfm = kick / (rmass ? rmass[i] : mass[type[i]]);
+    for (int k = 0; k < 3; k++) {
+      x[i][k] += rest * vhalf[i][k];
+      const double newjump = dtfm * fsum[i][k] - jump[i][k];
+      vhalf[i][k] += newjump;
+      jump[i][k] = newjump;
+      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
+      if (keep_start) fstart[i][k] = fsample[i][k];
+    }
+  }
+
+  // energy and virial at the node q^{n+1}, only on steps that tally them
+
+  if (rest != 0.0) {
+    if (eflag_step || vflag_step) {
+      memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
+      sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
+      memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+      evals_step += 1.0;
+    } else if ((update->ntimestep == output->next) || modify->n_end_of_step) {
+      comm->forward_comm();
+    }
+  }
+  evals_total += evals_step;
+  cached_step = -1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::end_of_step()
+{
+  if (adapt) choose_next_dt();
+}
+
+/* ----------------------------------------------------------------------
+   (re)start the two-step scheme from the current positions q^0, velocities
+   v^0 and forces F(q^0):
+     kick:  v^{1/2} = v^0 + (h/2) F/m, [v]^0 = h F/m
+     paper: v^{1/2} = v^0,            [v]^0 = 0
+   the node velocity v^0 = v^{1/2} - [v]^0/2 is stored back so that a later
+   run can tell whether velocities were changed in between.
+   with_start: also store the sampled force at q^0 as the Lobatto start node
+   (not when only the kick is redone with the complete forces)
+------------------------------------------------------------------------- */
+
+void FixPEJump::start_scheme(const char *why, bool with_start)
+{
+  if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
+
+  grow_work();
+  const bool from_setup = with_start;
+  with_start = with_start && rule->has_end_nodes();
+  if (with_start) primary_sampled_force();
+
+  double **v = atom->v;
+  double **f = atom->f;
+  const double *rmass = atom->rmass;
+  const double *mass = atom->mass;
+  const int *type = atom->type;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const double hkick = (init_style == INIT_KICK) ? update->dt * force->ftm2v : 0.0;
+
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double dtfm = hkick / (rmass ? rmass[i] : mass[type[i]]);
+    for (int k = 0; k < 3; k++) {
+      jump[i][k] = dtfm * f[i][k];
+      vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
+      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
+      if (with_start) fstart[i][k] = fsample[i][k];
+    }
+  }
+
+  // forces of fixes defined after this one are added after its setup():
+  // redo the initial kick with the complete forces at the first step
+
+  reinit_pending = from_setup && (init_style == INIT_KICK) && (modify->n_post_force_any > 0);
+  started = 1;
+  cached_step = -1;
+}
+
+/* ----------------------------------------------------------------------
+   sampled force-field force at the primary node into fsample (owned atoms)
+------------------------------------------------------------------------- */
+
+void FixPEJump::primary_sampled_force()
+{
+  const int nlocal = atom->nlocal;
+  const size_t nbytes = 3 * sizeof(double) * nlocal;
+  if (!nlocal && !split_primary) return;
+
+  if (!split_primary) {
+    memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
+  } else if (use_copy) {
+    if (force->newton) comm->reverse_comm(this);
+  } else {
+    if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], nbytes);
+    sampler->compute(sample_mask, 0, 0);
+    if (nlocal) {
+      memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
+      memcpy(&atom->f[0][0], &fsave[0][0], nbytes);
+    }
+    evals_step += sampler->fraction(sample_mask);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   fsum = sum_k w_k F_sampled(q_k) + (F(q_p) - F_sampled(q_p)) over the nodes
+   q_k = q^n + c_k h v^{n+1/2}; the primary node p was evaluated by the Verlet
+   loop, a Lobatto start node is the previous step's end node
+------------------------------------------------------------------------- */
+
+void FixPEJump::quadrature_sum()
+{
+  double **x = atom->x;
+  double **f = atom->f;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const int nall = nlocal + atom->nghost;
+  const int p = rule->primary();
+  const double wp = rule->weight[p];
+  const int reuse_start = rule->has_end_nodes();
+
+  if (split_primary || reuse_start) primary_sampled_force();
+
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    for (int k = 0; k < 3; k++) {
+      if (split_primary)
+        fsum[i][k] = wp * fsample[i][k] + (f[i][k] - fsample[i][k]);
+      else
+        fsum[i][k] = wp * f[i][k];
+      if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
+    }
+  }
+
+  const int first = reuse_start ? 1 : 0;
+  if (rule->size() - first <= 1) return;
+
+  // visit the other nodes from the saved primary positions and forces
+
+  if (nall) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nall);
+  if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
+
+  for (int node = first; node < rule->size(); node++) {
+    if (node == p) continue;
+    const double shift = (rule->node[node] - rule->node[p]) * h_step;
+    for (int i = 0; i < nlocal; i++) {
+      if (!(mask[i] & groupbit)) continue;
+      x[i][0] = xsave[i][0] + shift * vhalf[i][0];
+      x[i][1] = xsave[i][1] + shift * vhalf[i][1];
+      x[i][2] = xsave[i][2] + shift * vhalf[i][2];
+    }
+    sampler->compute(sample_mask, 0, 0);
+    evals_step += sampler->fraction(sample_mask);
+    const double w = rule->weight[node];
+    for (int i = 0; i < nlocal; i++) {
+      if (!(mask[i] & groupbit)) continue;
+      fsum[i][0] += w * f[i][0];
+      fsum[i][1] += w * f[i][1];
+      fsum[i][2] += w * f[i][2];
+    }
+  }
+
+  if (nall) memcpy(&x[0][0], &xsave[0][0], 3 * sizeof(double) * nall);
+  if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+}
+
+/* ----------------------------------------------------------------------
+   before moving: the quadrature nodes of this step lie on the segment
+   [q^n, q^{n+1}], so the neighbor lists stay valid for all of them if both
+   ends are within half the skin of the positions of the last build;
+   otherwise request a rebuild at this step. Also catch the unbounded growth
+   of the momentum jumps that marks a time step beyond the stability limit.
+------------------------------------------------------------------------- */
+
+void FixPEJump::check_excursion()
+{
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const double h = h_step;
+  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+
+  double local[3] = {0.0, 0.0, 0.0};    // excursion^2, step length^2, jump displacement^2
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    double step = 0.0, jmp = 0.0, d0 = 0.0, d1 = 0.0;
+    for (int k = 0; k < 3; k++) {
+      const double dx = h * vhalf[i][k];
+      step += dx * dx;
+      jmp += h * h * jump[i][k] * jump[i][k];
+      if (xhold) {
+        const double a = x[i][k] - xhold[i][k];
+        d0 += a * a;
+        d1 += (a + dx) * (a + dx);
+      }
+    }
+    if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = BLOWUP;
+    local[0] = MAX(local[0], MAX(d0, d1));
+    local[1] = MAX(local[1], step);
+    local[2] = MAX(local[2], jmp);
+  }
+  double global[3];
+  MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_MAX, world);
+
+  const double half_skin = 0.5 * neighbor->skin;
+  const double limit = (half_skin > 0.0) ? half_skin * half_skin : BLOWUP;
+  if (global[2] >= limit) {
+    energies();
+    error->all(FLERR,
+               "Fix {} is unstable at step {}: the momentum jumps grow without bound (jump "
+               "energy {:.8g}). The time step {} is beyond the stability limit (for a harmonic "
+               "bond dt < 2 sqrt(m/k)): reduce it, or use the adapt keyword",
+               style, update->ntimestep, cached[1], h);
+  }
+  if (global[1] >= limit)
+    error->all(FLERR,
+               "Fix {}: atoms move more than half the neighbor skin ({}) in one step at step {}: "
+               "reduce the time step or increase the skin",
+               style, neighbor->skin, update->ntimestep);
+  if (xhold && (global[0] > limit)) next_reneighbor = update->ntimestep;
+}
+
+/* ----------------------------------------------------------------------
+   forward rule for the adaptive step: the next jump is predicted as
+   [v]^{n+2} ~ 2 h' a - [v]^{n+1} with a the quadrature-averaged force of
+   this step; take the largest h' (growing by at most ADAPT_GROWTH per step)
+   with (1/8) sum m |[v]^{n+2}|^2 <= eps * E, E = max(|pseudo-energy at the
+   start of the run|, kinetic energy)
+------------------------------------------------------------------------- */
+
+void FixPEJump::choose_next_dt()
+{
+  double **v = atom->v;
+  const double *rmass = atom->rmass;
+  const double *mass = atom->mass;
+  const int *type = atom->type;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+
+  double local[4] = {0.0, 0.0, 0.0, 0.0};    // sum m a.a, m a.j, m j.j, m v.v
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double m = rmass ? rmass[i] : mass[type[i]];
+    for (int k = 0; k < 3; k++) {
+      const double a = force->ftm2v * fsum[i][k] / m;
+      local[0] += m * a * a;
+      local[1] += m * a * jump[i][k];
+      local[2] += m * jump[i][k] * jump[i][k];
+      local[3] += m * v[i][k] * v[i][k];
+    }
+  }
+  double sum[4];
+  MPI_Allreduce(local, sum, 4, MPI_DOUBLE, MPI_SUM, world);
+
+  const double mvv2e = force->mvv2e;
+  const double scale = MAX(energy_scale, 0.5 * mvv2e * sum[3]);
+  const double A = mvv2e * sum[0], B = mvv2e * sum[1], C = mvv2e * sum[2];
+  const double hcap = MIN(adapt_dtmax, ADAPT_GROWTH * update->dt);
+
+  // (1/8)(4 h^2 A - 4 h B + C) <= eps E  <=>  h^2 A - h B + C/4 - 2 eps E <= 0
+  double hnew = hcap;
+  if (A > 0.0) {
+    const double disc = B * B - 4.0 * A * (0.25 * C - 2.0 * adapt_eps * scale);
+    if (disc >= 0.0)
+      hnew = MIN(hcap, (B + sqrt(disc)) / (2.0 * A));
+    else
+      hnew = MIN(hcap, B / (2.0 * A));    // no step meets the bound: the smallest jump
+  }
+  hnew = MAX(hnew, adapt_dtmin);
+  if (hnew == update->dt) return;
+
+  update->update_time();
+  update->dt = hnew;
+  update->dt_default = 0;
+  if (force->pair) force->pair->reset_dt();
+  for (auto &ifix : modify->get_fix_list()) ifix->reset_dt();
+  output->reset_dt();
+}
+
+/* ----------------------------------------------------------------------
+   0: velocities are the node velocities this fix left, 1: all of them were
+   reversed (continue backwards in time: v^{1/2} -> -v^{-1/2}, same jump),
+   2: changed otherwise
+------------------------------------------------------------------------- */
+
+int FixPEJump::detect_velocity_change()
+{
+  double **v = atom->v;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+
+  int local[2] = {0, 0};    // some differ, some are not reversed
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    for (int k = 0; k < 3; k++) {
+      const double vnode = vhalf[i][k] - 0.5 * jump[i][k];
+      if (v[i][k] != vnode) local[0] = 1;
+      if (v[i][k] != -vnode) local[1] = 1;
+    }
+  }
+  int global[2];
+  MPI_Allreduce(local, global, 2, MPI_INT, MPI_MAX, world);
+  if (!global[0]) return 0;
+  if (global[1]) return 2;
+
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    for (int k = 0; k < 3; k++) {
+      vhalf[i][k] = jump[i][k] - vhalf[i][k];
+      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
+    }
+  }
+  cached_step = -1;
+  return 1;
+}
+
+/* ----------------------------------------------------------------------
+   pseudo-energy V(q^n) + pseudo-kinetic energy at the current positions;
+   evaluates the energy once (used at setup for the adapt normalisation)
+------------------------------------------------------------------------- */
+
+double FixPEJump::pseudo_energy_now()
+{
+  const int nlocal = atom->nlocal;
+  if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
+  sampler->compute(ForceSampler::ALL, ENERGY_GLOBAL, 0);
+  if (nlocal) memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+
+  double one = 0.0;
+  const int have = sampler->present();
+  if (have & ForceSampler::PAIR) one += force->pair->eng_vdwl + force->pair->eng_coul;
+  if (have & ForceSampler::BOND) one += force->bond->energy;
+  if (have & ForceSampler::ANGLE) one += force->angle->energy;
+  if (have & ForceSampler::DIHEDRAL) one += force->dihedral->energy;
+  if (have & ForceSampler::IMPROPER) one += force->improper->energy;
+  double pe = 0.0;
+  MPI_Allreduce(&one, &pe, 1, MPI_DOUBLE, MPI_SUM, world);
+  if (have & ForceSampler::KSPACE) pe += force->kspace->energy;
+  if (force->pair && force->pair->tail_flag) {
+    const double volume = domain->xprd * domain->yprd * domain->zprd;
+    pe += force->pair->etail / volume;
+  }
+  energies();
+  return pe + cached[0];
+}
+
+/* ----------------------------------------------------------------------
+   pseudo-kinetic energy (1/2) sum m v^{n-1/2}.v^{n+1/2} and jump energy
+   (1/8) sum m |[v]^n|^2 of the fix group
+------------------------------------------------------------------------- */
+
+void FixPEJump::energies()
+{
+  if (cached_step == update->ntimestep) return;
+
+  const double *rmass = atom->rmass;
+  const double *mass = atom->mass;
+  const int *type = atom->type;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+
+  double local[2] = {0.0, 0.0};
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double m = rmass ? rmass[i] : mass[type[i]];
+    for (int k = 0; k < 3; k++) {
+      local[0] += m * (vhalf[i][k] - jump[i][k]) * vhalf[i][k];
+      local[1] += m * jump[i][k] * jump[i][k];
+    }
+  }
+  MPI_Allreduce(local, cached, 2, MPI_DOUBLE, MPI_SUM, world);
+  cached[0] *= 0.5 * force->mvv2e;
+  cached[1] *= 0.125 * force->mvv2e;
+  cached_step = update->ntimestep;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJump::compute_scalar()
+{
+  return compute_vector(0);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJump::compute_vector(int n)
+{
+  switch (n) {
+    case 0:
+    case 1:
+      energies();
+      return cached[n];
+    case 2:
+      return update->dt;
+    case 3:
+      return evals_step;
+    case 4:
+      return evals_total;
+  }
+  return 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::grow_work()
+{
+  if (nmax_work >= atom->nmax) return;
+  nmax_work = atom->nmax;
+  memory->destroy(fsum);
+  memory->destroy(fsample);
+  memory->destroy(xsave);
+  memory->destroy(fsave);
+  memory->create(fsum, nmax_work, 3, "pe_jump:fsum");
+  memory->create(fsample, nmax_work, 3, "pe_jump:fsample");
+  memory->create(xsave, nmax_work, 3, "pe_jump:xsave");
+  memory->create(fsave, nmax_work, 3, "pe_jump:fsave");
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::grow_arrays(int nmax)
+{
+  memory->grow(vhalf, nmax, 3, "pe_jump:vhalf");
+  memory->grow(jump, nmax, 3, "pe_jump:jump");
+  if (rule->has_end_nodes()) memory->grow(fstart, nmax, 3, "pe_jump:fstart");
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
+{
+  for (int k = 0; k < 3; k++) {
+    vhalf[j][k] = vhalf[i][k];
+    jump[j][k] = jump[i][k];
+    if (fstart) fstart[j][k] = fstart[i][k];
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJump::pack_exchange(int i, double *buf)
+{
+  int m = 0;
+  for (int k = 0; k < 3; k++) buf[m++] = vhalf[i][k];
+  for (int k = 0; k < 3; k++) buf[m++] = jump[i][k];
+  if (fstart)
+    for (int k = 0; k < 3; k++) buf[m++] = fstart[i][k];
+  return m;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJump::unpack_exchange(int nlocal, double *buf)
+{
+  int m = 0;
+  for (int k = 0; k < 3; k++) vhalf[nlocal][k] = buf[m++];
+  for (int k = 0; k < 3; k++) jump[nlocal][k] = buf[m++];
+  if (fstart)
+    for (int k = 0; k < 3; k++) fstart[nlocal][k] = buf[m++];
+  return m;
+}
+
+/* ----------------------------------------------------------------------
+   global state: whether the two-step scheme runs, with which rule
+------------------------------------------------------------------------- */
+
+void FixPEJump::write_restart(FILE *fp)
+{
+  double list[4] = {static_cast<double>(started), static_cast<double>(rule->family()),
+                    static_cast<double>(rule->size()), evals_total};
+  if (comm->me == 0) {
+    int size = sizeof(list);
+    fwrite(&size, sizeof(int), 1, fp);
+    fwrite(list, sizeof(double), 4, fp);
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::restart(char *buf)
+{
+  auto *list = reinterpret_cast<double *>(buf);
+  const bool same_rule =
+      (static_cast<int>(list[1]) == rule->family()) && (static_cast<int>(list[2]) == rule->size());
+  started = (static_cast<int>(list[0]) != 0) && same_rule;
+  evals_total = list[3];
+  if (!same_rule && (comm->me == 0))
+    utils::logmesg(lmp,
+                   "Fix {}: quadrature differs from the restart file: the two-step scheme "
+                   "restarts from the current state\n",
+                   style);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJump::pack_restart(int i, double *buf)
+{
+  buf[0] = nstate + 1;
+  pack_exchange(i, &buf[1]);
+  return nstate + 1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::unpack_restart(int nlocal, int nth)
+{
+  double **extra = atom->extra;
+  int m = 0;
+  for (int i = 0; i < nth; i++) m += static_cast<int>(extra[nlocal][m]);
+  if (static_cast<int>(extra[nlocal][m]) != nstate + 1) {
+    started = 0;
+    return;
+  }
+  unpack_exchange(nlocal, &extra[nlocal][m + 1]);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJump::size_restart(int /*nlocal*/)
+{
+  return nstate + 1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJump::maxsize_restart()
+{
+  return nstate + 1;
+}
+
+/* ----------------------------------------------------------------------
+   reverse communication of the force field part copied before the Verlet
+   loop's own reverse communication
+------------------------------------------------------------------------- */
+
+int FixPEJump::pack_reverse_comm(int n, int first, double *buf)
+{
+  int m = 0;
+  for (int i = first; i < first + n; i++) {
+    buf[m++] = fsample[i][0];
+    buf[m++] = fsample[i][1];
+    buf[m++] = fsample[i][2];
+  }
+  return m;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
+{
+  int m = 0;
+  for (int i = 0; i < n; i++) {
+    const int j = list[i];
+    fsample[j][0] += buf[m++];
+    fsample[j][1] += buf[m++];
+    fsample[j][2] += buf[m++];
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJump::memory_usage()
+{
+  double bytes = (double) atom->nmax * 3 * sizeof(double) * (nstate / 3);
+  bytes += (double) nmax_work * 3 * sizeof(double) * 4;
+  return bytes;
+}

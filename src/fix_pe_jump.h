@@ -1,0 +1,112 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifdef FIX_CLASS
+// clang-format off
+FixStyle(pe_jump,FixPEJump);
+// clang-format on
+#else
+
+#ifndef LMP_FIX_PE_JUMP_H
+#define LMP_FIX_PE_JUMP_H
+
+#include "fix.h"
+
+namespace LAMMPS_NS {
+namespace PEJump {
+  class ForceSampler;
+  class Quadrature;
+}    // namespace PEJump
+
+class FixPEJump : public Fix {
+ public:
+  FixPEJump(class LAMMPS *, int, char **);
+  ~FixPEJump() override;
+
+  int setmask() override;
+  void init() override;
+  void setup(int) override;
+  void setup_pre_reverse(int, int) override;
+  void initial_integrate(int) override;
+  void pre_reverse(int, int) override;
+  void final_integrate() override;
+  void end_of_step() override;
+
+  double compute_scalar() override;
+  double compute_vector(int) override;
+
+  void grow_arrays(int) override;
+  void copy_arrays(int, int, int) override;
+  int pack_exchange(int, double *) override;
+  int unpack_exchange(int, double *) override;
+  void write_restart(FILE *) override;
+  void restart(char *) override;
+  int pack_restart(int, double *) override;
+  void unpack_restart(int, int) override;
+  int size_restart(int) override;
+  int maxsize_restart() override;
+  int pack_reverse_comm(int, int, double *) override;
+  void unpack_reverse_comm(int, int *, double *) override;
+  double memory_usage() override;
+
+ protected:
+  enum Init { INIT_KICK, INIT_PAPER };
+
+  PEJump::Quadrature *rule;
+  PEJump::ForceSampler *sampler;
+  int init_style;
+  int sample_mask;    // contributions sampled at the quadrature nodes
+
+  // adaptive time step: (1/8)|M^-1/2 [p]|^2 <= eps * energy scale
+  int adapt;
+  double adapt_eps, adapt_dtmin, adapt_dtmax;
+  double energy_scale;    // |pseudo-energy| at the start of the run
+
+  // per-atom state, velocity units: free-flight velocity v^{n+1/2},
+  // jump [v]^n, and (Lobatto rules) the sampled force at the start node
+  double **vhalf, **jump, **fstart;
+  int nstate;    // values per atom in exchange and restart buffers
+
+  // per-step work arrays (not migrated)
+  double **fsum;       // quadrature sum of the forces over the step
+  double **fsample;    // sampled force at the primary node (when split)
+  double **xsave;      // positions at the primary node
+  double **fsave;      // total forces at the primary node
+  int nmax_work;
+
+  int started;           // 1 once the two-step state is valid
+  int reinit_pending;    // redo the initial kick when all fix forces are in
+  int split_primary;     // 1 if the primary node force must be split
+  int use_copy;          // split by copying f before reverse communication
+  int eflag_step, vflag_step;
+  double h_step;    // step size used in the current step
+
+  double evals_step, evals_total;    // force evaluations (units of full ones)
+  bigint cached_step;
+  double cached[2];    // pseudo-kinetic and jump energy at cached_step
+
+  void start_scheme(const char *, bool);
+  void primary_sampled_force();
+  void quadrature_sum();
+  void check_excursion();
+  void choose_next_dt();
+  void energies();
+  void grow_work();
+  int detect_velocity_change();
+  double pseudo_energy_now();
+};
+
+}    // namespace LAMMPS_NS
+
+#endif
+#endif

@@ -1,0 +1,127 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#include "pe_jump_force_sampler.h"
+
+#include "angle.h"
+#include "atom.h"
+#include "bond.h"
+#include "comm.h"
+#include "dihedral.h"
+#include "force.h"
+#include "improper.h"
+#include "kspace.h"
+#include "neigh_list.h"
+#include "neighbor.h"
+#include "pair.h"
+
+#include <cstring>
+
+using namespace LAMMPS_NS;
+using namespace LAMMPS_NS::PEJump;
+
+/* ---------------------------------------------------------------------- */
+
+ForceSampler::ForceSampler(LAMMPS *lmp) : Pointers(lmp), counted_at(-1)
+{
+  for (double &c : count) c = 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int ForceSampler::parse(const char *name)
+{
+  if (strcmp(name, "pair") == 0) return PAIR;
+  if (strcmp(name, "bond") == 0) return BOND;
+  if (strcmp(name, "angle") == 0) return ANGLE;
+  if (strcmp(name, "dihedral") == 0) return DIHEDRAL;
+  if (strcmp(name, "improper") == 0) return IMPROPER;
+  if (strcmp(name, "kspace") == 0) return KSPACE;
+  if (strcmp(name, "all") == 0) return ALL;
+  return 0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int ForceSampler::present() const
+{
+  int mask = 0;
+  if (force->pair && force->pair->compute_flag) mask |= PAIR;
+  if (atom->molecular != Atom::ATOMIC) {
+    if (force->bond) mask |= BOND;
+    if (force->angle) mask |= ANGLE;
+    if (force->dihedral) mask |= DIHEDRAL;
+    if (force->improper) mask |= IMPROPER;
+  }
+  if (force->kspace && force->kspace->compute_flag) mask |= KSPACE;
+  return mask;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ForceSampler::compute(int mask, int eflag, int vflag)
+{
+  comm->forward_comm();
+
+  size_t nbytes = sizeof(double) * atom->nlocal;
+  if (force->newton) nbytes += sizeof(double) * atom->nghost;
+  if (nbytes) memset(&atom->f[0][0], 0, 3 * nbytes);
+
+  mask &= present();
+  if (mask & PAIR) force->pair->compute(eflag, vflag);
+  if (mask & BOND) force->bond->compute(eflag, vflag);
+  if (mask & ANGLE) force->angle->compute(eflag, vflag);
+  if (mask & DIHEDRAL) force->dihedral->compute(eflag, vflag);
+  if (mask & IMPROPER) force->improper->compute(eflag, vflag);
+  if (mask & KSPACE) force->kspace->compute(eflag, vflag);
+
+  if (force->newton) comm->reverse_comm();
+}
+
+/* ---------------------------------------------------------------------- */
+
+double ForceSampler::fraction(int mask)
+{
+  const int have = present();
+  if ((mask & have) == have) return 1.0;
+  if (counted_at != neighbor->ncalls) recount();
+
+  double all = 0.0, part = 0.0;
+  for (int k = 0; k < 5; ++k) {
+    if (!(have & (1 << k))) continue;
+    all += count[k];
+    if (mask & (1 << k)) part += count[k];
+  }
+  return (all > 0.0) ? part / all : 0.0;
+}
+
+/* ----------------------------------------------------------------------
+   global interaction counts: pairs of the pair style's neighbor list and
+   the bonded lists of the neighbor class. k-space has no countable
+   interactions and is left out of the fractions.
+------------------------------------------------------------------------- */
+
+void ForceSampler::recount()
+{
+  double local[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  if (force->pair && force->pair->list) {
+    const NeighList *list = force->pair->list;
+    for (int ii = 0; ii < list->inum; ++ii) local[0] += list->numneigh[list->ilist[ii]];
+  }
+  local[1] = neighbor->nbondlist;
+  local[2] = neighbor->nanglelist;
+  local[3] = neighbor->ndihedrallist;
+  local[4] = neighbor->nimproperlist;
+  MPI_Allreduce(local, count, 5, MPI_DOUBLE, MPI_SUM, world);
+  counted_at = neighbor->ncalls;
+}

@@ -1,0 +1,65 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_FORCE_SAMPLER_H
+#define LMP_PE_JUMP_FORCE_SAMPLER_H
+
+#include "pointers.h"
+
+namespace LAMMPS_NS {
+namespace PEJump {
+
+  // Evaluates selected force-field contributions at the current positions of
+  // the owned atoms (ghosts are brought up to date first), the way the Verlet
+  // loop does, and counts interactions so that evaluations can be reported
+  // in units of full force evaluations.
+
+  class ForceSampler : protected Pointers {
+   public:
+    enum Contribution {
+      PAIR = 1 << 0,
+      BOND = 1 << 1,
+      ANGLE = 1 << 2,
+      DIHEDRAL = 1 << 3,
+      IMPROPER = 1 << 4,
+      KSPACE = 1 << 5,
+      ALL = (1 << 6) - 1
+    };
+
+    ForceSampler(class LAMMPS *);
+
+    // contributions that the current force field has (call in init())
+    int present() const;
+
+    // forward-communicate positions, clear forces, compute the contributions
+    // in mask with the given energy/virial flags, reverse-communicate forces
+    void compute(int mask, int eflag, int vflag);
+
+    // fraction of the system's interactions (neighbor pairs, bonds, angles,
+    // dihedrals, impropers) that the contributions in mask represent;
+    // collective call, recounts only after a neighbor list rebuild
+    double fraction(int mask);
+
+    // parse a contribution name (pair, bond, ..., kspace, all), 0 if unknown
+    static int parse(const char *name);
+
+   private:
+    bigint counted_at;    // neighbor->ncalls when the counts were taken
+    double count[6];      // global number of interactions per contribution
+    void recount();
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif

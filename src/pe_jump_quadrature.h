@@ -1,0 +1,59 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_QUADRATURE_H
+#define LMP_PE_JUMP_QUADRATURE_H
+
+#include <string>
+#include <vector>
+
+namespace LAMMPS_NS {
+namespace PEJump {
+
+  // Symmetric quadrature rule on the unit interval [0,1]:
+  // int_0^1 f(s) ds ~ sum_k weight[k] f(node[k]), nodes in ascending order.
+  // Gauss-Legendre with N points is exact for polynomials of degree 2N-1,
+  // Gauss-Lobatto with N points (both ends are nodes) for degree 2N-3.
+
+  class Quadrature {
+   public:
+    enum Family { LEGENDRE, LOBATTO };
+
+    static constexpr int MAX_POINTS = 5;
+
+    Quadrature(Family family, int npoints);
+
+    Family family() const { return fam; }
+    int size() const { return static_cast<int>(node.size()); }
+    int degree() const { return fam == LEGENDRE ? 2 * size() - 1 : 2 * size() - 3; }
+    std::string name() const;
+
+    // true if the first node is the start of the interval and the last its end,
+    // so that the end node of one step is the start node of the next
+    bool has_end_nodes() const { return fam == LOBATTO; }
+
+    // node used for the force evaluation that the MD loop does anyway:
+    // the end node for Lobatto rules, the middle (or first past the middle)
+    // node for Legendre rules
+    int primary() const;
+
+    std::vector<double> node, weight;
+
+   private:
+    Family fam;
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif
