@@ -49,6 +49,7 @@ using PEJump::ForceSampler;
 using PEJump::Quadrature;
 
 static constexpr double ADAPT_GROWTH = 1.05;    // largest step growth factor per step
+static constexpr double ADAPT_SAFETY = 0.5;     // aim at this fraction of the bound
 static constexpr double BLOWUP = 1.0e300;       // stands for a non-finite value in reductions
 
 /* ---------------------------------------------------------------------- */
@@ -535,8 +536,9 @@ void FixPEJump::check_excursion()
    forward rule for the adaptive step: the next jump is predicted as
    [v]^{n+2} ~ 2 h' a - [v]^{n+1} with a the quadrature-averaged force of
    this step; take the largest h' (growing by at most ADAPT_GROWTH per step)
-   with (1/8) sum m |[v]^{n+2}|^2 <= eps * E, E = max(|pseudo-energy at the
-   start of the run|, kinetic energy)
+   with (1/8) sum m |[v]^{n+2}|^2 <= ADAPT_SAFETY * eps * E, where
+   E = max(|pseudo-energy at the start of the run|, kinetic energy); the
+   safety factor absorbs the error of the prediction so the bound holds
 ------------------------------------------------------------------------- */
 
 void FixPEJump::choose_next_dt()
@@ -571,7 +573,7 @@ void FixPEJump::choose_next_dt()
   // (1/8)(4 h^2 A - 4 h B + C) <= eps E  <=>  h^2 A - h B + C/4 - 2 eps E <= 0
   double hnew = hcap;
   if (A > 0.0) {
-    const double disc = B * B - 4.0 * A * (0.25 * C - 2.0 * adapt_eps * scale);
+    const double disc = B * B - 4.0 * A * (0.25 * C - 2.0 * ADAPT_SAFETY * adapt_eps * scale);
     if (disc >= 0.0)
       hnew = MIN(hcap, (B + sqrt(disc)) / (2.0 * A));
     else

@@ -1,0 +1,103 @@
+// unit tests for the quadrature rules of fix pe_jump: symmetry, weights,
+// and the degree of exactness of each rule (exact up to its degree, not
+// beyond), checked on the monomials of [0,1] against exact integrals
+
+#include "pe_jump_quadrature.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+
+using LAMMPS_NS::PEJump::Quadrature;
+
+namespace {
+
+double integrate(const Quadrature &q, int power)
+{
+  double sum = 0.0;
+  for (int k = 0; k < q.size(); ++k) sum += q.weight[k] * std::pow(q.node[k], power);
+  return sum;
+}
+
+struct RuleCase {
+  Quadrature::Family family;
+  int npoints;
+  int degree;
+};
+
+class QuadratureRule : public ::testing::TestWithParam<RuleCase> {};
+
+}    // namespace
+
+TEST_P(QuadratureRule, SymmetricNodesAndUnitWeight)
+{
+  const auto c = GetParam();
+  Quadrature q(c.family, c.npoints);
+  ASSERT_EQ(q.size(), c.npoints);
+  double wsum = 0.0;
+  for (int k = 0; k < q.size(); ++k) {
+    wsum += q.weight[k];
+    EXPECT_GT(q.weight[k], 0.0);
+    EXPECT_GE(q.node[k], 0.0);
+    EXPECT_LE(q.node[k], 1.0);
+    if (k > 0) {
+      EXPECT_LT(q.node[k - 1], q.node[k]);
+    }
+    EXPECT_NEAR(q.node[k], 1.0 - q.node[q.size() - 1 - k], 1.2e-16);
+    EXPECT_DOUBLE_EQ(q.weight[k], q.weight[q.size() - 1 - k]);
+  }
+  EXPECT_NEAR(wsum, 1.0, 2e-16);
+  if (c.family == Quadrature::LOBATTO) {
+    EXPECT_EQ(q.node.front(), 0.0);
+    EXPECT_EQ(q.node.back(), 1.0);
+    EXPECT_EQ(q.primary(), q.size() - 1);
+  } else {
+    EXPECT_GT(q.node.front(), 0.0);
+    EXPECT_LT(q.node.back(), 1.0);
+    EXPECT_GE(q.node[q.primary()], 0.5);
+  }
+}
+
+TEST_P(QuadratureRule, ExactUpToItsDegreeOnly)
+{
+  const auto c = GetParam();
+  Quadrature q(c.family, c.npoints);
+  EXPECT_EQ(q.degree(), c.degree);
+  for (int p = 0; p <= c.degree; ++p)
+    EXPECT_NEAR(integrate(q, p), 1.0 / (p + 1), 4e-16) << q.name() << " monomial degree " << p;
+  // the first monomial beyond the degree is not integrated exactly
+  const double miss = std::fabs(integrate(q, c.degree + 1) - 1.0 / (c.degree + 2));
+  EXPECT_GT(miss, 1e-6) << q.name() << " exact beyond its degree";
+}
+
+INSTANTIATE_TEST_SUITE_P(Rules, QuadratureRule,
+                         ::testing::Values(RuleCase{Quadrature::LEGENDRE, 1, 1},
+                                           RuleCase{Quadrature::LEGENDRE, 2, 3},
+                                           RuleCase{Quadrature::LEGENDRE, 3, 5},
+                                           RuleCase{Quadrature::LEGENDRE, 4, 7},
+                                           RuleCase{Quadrature::LEGENDRE, 5, 9},
+                                           RuleCase{Quadrature::LOBATTO, 2, 1},
+                                           RuleCase{Quadrature::LOBATTO, 3, 3},
+                                           RuleCase{Quadrature::LOBATTO, 4, 5},
+                                           RuleCase{Quadrature::LOBATTO, 5, 7}));
+
+TEST(Quadrature, KnownNodesToFullPrecision)
+{
+  // Gauss-Legendre 2: 1/2 -+ sqrt(3)/6; Lobatto 4 interior: 1/2 -+ sqrt(5)/10
+  Quadrature g2(Quadrature::LEGENDRE, 2);
+  EXPECT_NEAR(g2.node[0], 0.21132486540518711775, 1e-16);
+  Quadrature l4(Quadrature::LOBATTO, 4);
+  EXPECT_NEAR(l4.node[1], 0.27639320225002103036, 1e-16);
+  EXPECT_NEAR(l4.weight[1], 5.0 / 12.0, 1e-16);
+  Quadrature g5(Quadrature::LEGENDRE, 5);
+  EXPECT_NEAR(g5.node[0], 0.046910077030668003601, 1e-16);
+  EXPECT_NEAR(g5.weight[0], 0.11846344252809454376, 1e-16);
+}
+
+TEST(Quadrature, RejectsPointCountsOutOfRange)
+{
+  EXPECT_THROW(Quadrature(Quadrature::LEGENDRE, 0), std::invalid_argument);
+  EXPECT_THROW(Quadrature(Quadrature::LEGENDRE, 6), std::invalid_argument);
+  EXPECT_THROW(Quadrature(Quadrature::LOBATTO, 1), std::invalid_argument);
+  EXPECT_THROW(Quadrature(Quadrature::LOBATTO, 6), std::invalid_argument);
+}
