@@ -6,10 +6,10 @@
 For each log: the integrator (from the fix command echoed in the log), the
 loop time, and for etotal (H = pe + ke) and v_Ht (pseudo-energy of fix
 pe_jump, = etotal for fix nve):
-  * change over the whole run, end - start
-  * on the equilibrated part t >= teq (the first ~0.5 tau melts the fcc
-    lattice): least-squares drift per tau, rms fluctuation about that line,
-    and max - min
+  * change during the melt of the fcc lattice, E(teq) - E(0) (teq = 0.5 tau
+    by default), and over the whole run, E(end) - E(0)
+  * on the equilibrated part t >= teq: change E(end) - E(teq), least-squares
+    drift per tau, rms fluctuation about that line, and max - min
 """
 import math
 import re
@@ -75,10 +75,9 @@ def main(argv):
             eq = [(a, b) for a, b in zip(t, y) if a >= teq - 1e-12]
             ta, ya = [a for a, _ in eq], [b for _, b in eq]
             slope, rms = fit(ta, ya)
-            print(f"  {name:6s}: start {y[0]:.6f}  end {y[-1]:.6f}  end-start {y[-1]-y[0]:+.4e}"
-                  f" | t >= {teq}: drift {slope:+.4e}/tau  rms {rms:.4e}"
-                  f"  max-min {max(ya)-min(ya):.4e}")
-
+            print(f"  {name:6s}: E(0) {y[0]:.6f}  melt {ya[0]-y[0]:+.4e}  whole run {y[-1]-y[0]:+.4e}"
+                  f" | t >= {teq}: change {ya[-1]-ya[0]:+.4e}  drift {slope:+.4e}/tau"
+                  f"  rms {rms:.4e}  max-min {max(ya)-min(ya):.4e}")
 
 if __name__ == "__main__":
     main(sys.argv[1:])
