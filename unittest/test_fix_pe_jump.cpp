@@ -26,6 +26,18 @@ constexpr double OMEGA = 50.0;
 
 // pseudo-energy H~ = pe + f_ID and discrete energy H = pe + ke after a run
 double pseudo_energy(Sim &s) { return s.eval("c_thermo_pe+f_1"); }
+
+// max - min of the values stored by a fix vector
+double vector_range(Sim &s, const std::string &id)
+{
+  auto *vec = s.lmp->modify->get_fix_by_id(id);
+  double lo = 1e300, hi = -1e300;
+  for (int i = 0; i < vec->size_vector; ++i) {
+    lo = std::min(lo, vec->compute_vector(i));
+    hi = std::max(hi, vec->compute_vector(i));
+  }
+  return hi - lo;
+}
 double discrete_energy(Sim &s)
 {
   if (!s.lmp->modify->get_compute_by_id("ke")) s.cmd("compute ke all ke");
@@ -230,14 +242,9 @@ TEST(PEJump, MidpointNotExactOnQuarticSprings)
   s.cmd("fix pt all vector 10 v_pt");
   s.cmd("thermo 1000");
   s.cmd("run 20000 post no");
-  auto *vec = s.lmp->modify->get_fix_by_id("pt");
-  double lo = 1e300, hi = -1e300;
-  for (int i = 0; i < vec->size_vector; ++i) {
-    lo = std::min(lo, vec->compute_vector(i));
-    hi = std::max(hi, vec->compute_vector(i));
-  }
-  EXPECT_GT(hi - lo, 1e-8);
-  EXPECT_LT(hi - lo, 1e-5);
+  const double range = vector_range(s, "pt");
+  EXPECT_GT(range, 1e-8);
+  EXPECT_LT(range, 1e-5);
 }
 
 /* ----------------------------------------------------------------------
@@ -256,13 +263,7 @@ TEST(PEJump, KickInitialisationKeepsParasiticModeOut)
     s.cmd("fix H all vector 10 v_H");
     s.cmd("thermo 10000");
     s.cmd("run 50000 post no");
-    auto *vec = s.lmp->modify->get_fix_by_id("H");
-    double lo = 1e300, hi = -1e300;
-    for (int i = 0; i < vec->size_vector; ++i) {
-      lo = std::min(lo, vec->compute_vector(i));
-      hi = std::max(hi, vec->compute_vector(i));
-    }
-    return hi - lo;
+    return vector_range(s, "H");
   };
   const double verlet = energy_range("fix 1 chain nve");
   const double kick = energy_range("fix 1 chain pe_jump");
