@@ -53,11 +53,15 @@ static constexpr double BLOWUP = 1.0e300;       // stands for a non-finite value
 
 /* ---------------------------------------------------------------------- */
 
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3) {}
+
+/* ---------------------------------------------------------------------- */
+
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
     fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr)
 {
-  if (narg < 3) utils::missing_cmd_args(FLERR, "fix pe_jump", error);
+  if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
   auto family = Quadrature::LEGENDRE;
   int npoints = 1;
@@ -66,10 +70,11 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   adapt = 0;
   adapt_eps = adapt_dtmin = adapt_dtmax = 0.0;
 
-  int iarg = 3;
+  const std::string fix = std::string("fix ") + style;
+  int iarg = first_keyword;
   while (iarg < narg) {
     if (strcmp(arg[iarg], "quadrature") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, "fix pe_jump quadrature", error);
+      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature", error);
       const std::string which = arg[iarg + 1];
       if (which == "midpoint") {
         family = Quadrature::LEGENDRE;
@@ -77,35 +82,35 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
         iarg += 2;
       } else if ((which == "lobatto") || (which == "legendre")) {
         if (iarg + 3 > narg)
-          utils::missing_cmd_args(FLERR, "fix pe_jump quadrature " + which, error);
+          utils::missing_cmd_args(FLERR, fix + " quadrature " + which, error);
         npoints = utils::inumeric(FLERR, arg[iarg + 2], false, lmp);
         family = (which == "lobatto") ? Quadrature::LOBATTO : Quadrature::LEGENDRE;
         const int nmin = (family == Quadrature::LOBATTO) ? 2 : 1;
         if ((npoints < nmin) || (npoints > Quadrature::MAX_POINTS))
-          error->all(FLERR, "Fix pe_jump quadrature {} needs {} to {} points, got {}", which, nmin,
+          error->all(FLERR, "Fix {} quadrature {} needs {} to {} points, got {}", style, which, nmin,
                      Quadrature::MAX_POINTS, npoints);
         iarg += 3;
       } else {
-        error->all(FLERR, "Unknown fix pe_jump quadrature rule: {}", which);
+        error->all(FLERR, "Unknown fix {} quadrature rule: {}", style, which);
       }
     } else if (strcmp(arg[iarg], "init") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, "fix pe_jump init", error);
+      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " init", error);
       if (strcmp(arg[iarg + 1], "kick") == 0)
         init_style = INIT_KICK;
       else if (strcmp(arg[iarg + 1], "paper") == 0)
         init_style = INIT_PAPER;
       else
-        error->all(FLERR, "Unknown fix pe_jump init style: {}", arg[iarg + 1]);
+        error->all(FLERR, "Unknown fix {} init style: {}", style, arg[iarg + 1]);
       iarg += 2;
     } else if (strcmp(arg[iarg], "adapt") == 0) {
-      if (iarg + 4 > narg) utils::missing_cmd_args(FLERR, "fix pe_jump adapt", error);
+      if (iarg + 4 > narg) utils::missing_cmd_args(FLERR, fix + " adapt", error);
       adapt = 1;
       adapt_eps = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
       adapt_dtmin = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
       adapt_dtmax = utils::numeric(FLERR, arg[iarg + 3], false, lmp);
-      if (adapt_eps <= 0.0) error->all(FLERR, "Fix pe_jump adapt eps must be > 0");
+      if (adapt_eps <= 0.0) error->all(FLERR, "Fix {} adapt eps must be > 0", style);
       if ((adapt_dtmin <= 0.0) || (adapt_dtmax < adapt_dtmin))
-        error->all(FLERR, "Fix pe_jump adapt needs 0 < dtmin <= dtmax");
+        error->all(FLERR, "Fix {} adapt needs 0 < dtmin <= dtmax", style);
       iarg += 4;
     } else if (strcmp(arg[iarg], "sample") == 0) {
       sample_mask = 0;
@@ -118,10 +123,11 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
       }
       if (!sample_mask)
         error->all(FLERR,
-                   "Fix pe_jump sample needs one or more of pair, bond, angle, dihedral, "
-                   "improper, kspace, or all");
+                   "Fix {} sample needs one or more of pair, bond, angle, dihedral, improper, "
+                   "kspace, or all",
+                   style);
     } else {
-      error->all(FLERR, "Unknown fix pe_jump keyword: {}", arg[iarg]);
+      error->all(FLERR, "Unknown fix {} keyword: {}", style, arg[iarg]);
     }
   }
 
@@ -251,7 +257,7 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   reinit_pending = 0;
 
   h_step = update->dt;
-  check_excursion();
+  check_lists();
 
   double **x = atom->x;
   const int *mask = atom->mask;
@@ -264,6 +270,28 @@ void FixPEJump::initial_integrate(int /*vflag*/)
       x[i][1] += c * vhalf[i][1];
       x[i][2] += c * vhalf[i][2];
     }
+}
+
+/* ----------------------------------------------------------------------
+   forces of this step are evaluated at q^n + c h v^{n+1/2} for c from the
+   first node sampled (the start node of a Lobatto rule is reused) to the
+   last one, or to the end node q^{n+1} if the step tallies energy or virial
+------------------------------------------------------------------------- */
+
+void FixPEJump::check_lists()
+{
+  const int first = rule->has_end_nodes() ? 1 : 0;
+  const double c_hi = tally_step() ? 1.0 : rule->node.back();
+  check_excursion(rule->node[first] * h_step, c_hi * h_step);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool FixPEJump::tally_step() const
+{
+  const bigint now = update->ntimestep;
+  return (update->eflag_global == now) || (update->eflag_atom == now) ||
+      (update->vflag_global == now) || (update->vflag_atom == now);
 }
 
 /* ----------------------------------------------------------------------
@@ -293,44 +321,55 @@ void FixPEJump::final_integrate()
   quadrature_sum();
 
   double **x = atom->x;
-  double **v = atom->v;
-  const double *rmass = atom->rmass;
-  const double *mass = atom->mass;
-  const int *type = atom->type;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const double h = h_step;
-  const double rest = (1.0 - rule->node[rule->primary()]) * h;
-  const double kick = 2.0 * h * force->ftm2v;
+  const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const int keep_start = rule->has_end_nodes();
 
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
-    const double dtfm = kick / (rmass ? rmass[i] : mass[type[i]]);
-    for (int k = 0; k < 3; k++) {
-      x[i][k] += rest * vhalf[i][k];
-      const double newjump = dtfm * fsum[i][k] - jump[i][k];
-      vhalf[i][k] += newjump;
-      jump[i][k] = newjump;
-      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-      if (keep_start) fstart[i][k] = fsample[i][k];
-    }
+    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+    jump_atom(i, h_step, fsum[i]);
+    if (keep_start)
+      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
   }
 
-  // energy and virial at the node q^{n+1}, only on steps that tally them
-
-  if (rest != 0.0) {
-    if (eflag_step || vflag_step) {
-      memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
-      sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
-      memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
-      evals_step += 1.0;
-    } else if ((update->ntimestep == output->next) || modify->n_end_of_step) {
-      comm->forward_comm();
-    }
-  }
+  if (rest != 0.0) tally_at_node();
   evals_total += evals_step;
   cached_step = -1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::jump_atom(int i, double h, const double *favg)
+{
+  const double m = atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
+  const double dtfm = 2.0 * h * force->ftm2v / m;
+  for (int k = 0; k < 3; k++) {
+    const double newjump = dtfm * favg[k] - jump[i][k];
+    vhalf[i][k] += newjump;
+    jump[i][k] = newjump;
+    atom->v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
+  }
+}
+
+/* ----------------------------------------------------------------------
+   the atoms are at the node q^{n+1} but the last force evaluation was
+   elsewhere: on steps that tally energy or virial evaluate everything
+   once more at the node; on output steps bring the ghosts to the node
+------------------------------------------------------------------------- */
+
+void FixPEJump::tally_at_node()
+{
+  const int nlocal = atom->nlocal;
+  if (eflag_step || vflag_step) {
+    if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
+    sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
+    if (nlocal) memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+    evals_step += 1.0;
+  } else if ((update->ntimestep == output->next) || modify->n_end_of_step) {
+    comm->forward_comm();
+  }
 }
 
 /* ---------------------------------------------------------------------- */
@@ -356,9 +395,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
 
   grow_work();
-  const bool from_setup = with_start;
-  with_start = with_start && rule->has_end_nodes();
-  if (with_start) primary_sampled_force();
+  if (with_start && rule->has_end_nodes()) store_start_node();
 
   double **v = atom->v;
   double **f = atom->f;
@@ -367,25 +404,45 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   const int *type = atom->type;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const double hkick = (init_style == INIT_KICK) ? update->dt * force->ftm2v : 0.0;
+  const double kick = (init_style == INIT_KICK) ? force->ftm2v : 0.0;
 
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
-    const double dtfm = hkick / (rmass ? rmass[i] : mass[type[i]]);
+    const double dtfm = kick * kick_step(i) / (rmass ? rmass[i] : mass[type[i]]);
     for (int k = 0; k < 3; k++) {
       jump[i][k] = dtfm * f[i][k];
       vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
       v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-      if (with_start) fstart[i][k] = fsample[i][k];
     }
   }
 
   // forces of fixes defined after this one are added after its setup():
   // redo the initial kick with the complete forces at the first step
 
-  reinit_pending = from_setup && (init_style == INIT_KICK) && (modify->n_post_force_any > 0);
+  reinit_pending = with_start && (init_style == INIT_KICK) && (modify->n_post_force_any > 0);
   started = 1;
   cached_step = -1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJump::kick_step(int /*i*/) const
+{
+  return update->dt;
+}
+
+/* ----------------------------------------------------------------------
+   Lobatto rules: the sampled force at q^0 is the start node of the first step
+------------------------------------------------------------------------- */
+
+void FixPEJump::store_start_node()
+{
+  primary_sampled_force();
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  for (int i = 0; i < nlocal; i++)
+    if (mask[i] & groupbit)
+      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
 }
 
 /* ----------------------------------------------------------------------
@@ -445,29 +502,49 @@ void FixPEJump::quadrature_sum()
 
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
+  sample_nodes(first, p, h_step, -rule->node[p] * h_step, nullptr, fsum, nullptr);
+}
 
-  // visit the other nodes from the saved primary positions and forces
+/* ----------------------------------------------------------------------
+   acc += sum_k w_k F(q_k) over the nodes k = first .. N-1 except skip, with
+   q_k = x + (scale c_k + offset) v^{n+1/2} for the owned atoms of the group
+   (and with select[i] != 0 if select is given); all other atoms stay where
+   they are. fend (if given) receives the forces at the last node.
+   positions and forces are restored afterwards
+------------------------------------------------------------------------- */
+
+void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, const int *select,
+                             double **acc, double **fend)
+{
+  double **x = atom->x;
+  double **f = atom->f;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const int nall = nlocal + atom->nghost;
+  const int last = rule->size() - 1;
 
   if (nall) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nall);
   if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
 
-  for (int node = first; node < rule->size(); node++) {
-    if (node == p) continue;
-    const double shift = (rule->node[node] - rule->node[p]) * h_step;
+  for (int node = first; node <= last; node++) {
+    if (node == skip) continue;
+    const double shift = scale * rule->node[node] + offset;
     for (int i = 0; i < nlocal; i++) {
-      if (!(mask[i] & groupbit)) continue;
+      if (!(mask[i] & groupbit) || (select && !select[i])) continue;
       x[i][0] = xsave[i][0] + shift * vhalf[i][0];
       x[i][1] = xsave[i][1] + shift * vhalf[i][1];
       x[i][2] = xsave[i][2] + shift * vhalf[i][2];
     }
     sampler->compute(sample_mask, 0, 0);
-    evals_step += sampler->fraction(sample_mask);
+    evals_step += node_cost();
     const double w = rule->weight[node];
     for (int i = 0; i < nlocal; i++) {
-      if (!(mask[i] & groupbit)) continue;
-      fsum[i][0] += w * f[i][0];
-      fsum[i][1] += w * f[i][1];
-      fsum[i][2] += w * f[i][2];
+      if (!(mask[i] & groupbit) || (select && !select[i])) continue;
+      acc[i][0] += w * f[i][0];
+      acc[i][1] += w * f[i][1];
+      acc[i][2] += w * f[i][2];
+      if (fend && (node == last))
+        for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
     }
   }
 
@@ -475,17 +552,24 @@ void FixPEJump::quadrature_sum()
   if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
 }
 
+/* ---------------------------------------------------------------------- */
+
+double FixPEJump::node_cost()
+{
+  return sampler->fraction(sample_mask);
+}
+
 /* ----------------------------------------------------------------------
    before moving: the positions where forces are evaluated in this step lie
-   on the segment q^n + c h v^{n+1/2}, c in [c_lo, c_hi] (the nodes sampled,
-   the primary node, and q^{n+1} on steps that tally energy or virial), so
-   the neighbor lists stay valid for all of them if both ends are within
-   half the skin of the positions of the last build; otherwise request a
-   rebuild at this step. Also catch the unbounded growth of the momentum
-   jumps that marks a time step beyond the stability limit.
+   on the segments x + t v^{n+1/2}, t in [lo, hi] (and for atoms with
+   select[i] != 0 also t in [lo2, hi2]), so the neighbor lists stay valid
+   for all of them if the ends are within half the skin of the positions of
+   the last build; otherwise request a rebuild at this step. Also catch the
+   unbounded growth of the momentum jumps that marks a time step beyond the
+   stability limit.
 ------------------------------------------------------------------------- */
 
-void FixPEJump::check_excursion()
+void FixPEJump::check_excursion(double lo, double hi, const int *select, double lo2, double hi2)
 {
   double **x = atom->x;
   const int *mask = atom->mask;
@@ -493,29 +577,24 @@ void FixPEJump::check_excursion()
   const double h = h_step;
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
 
-  const bigint now = update->ntimestep;
-  const bool tally = (update->eflag_global == now) || (update->eflag_atom == now) ||
-      (update->vflag_global == now) || (update->vflag_atom == now);
-  const int first = rule->has_end_nodes() ? 1 : 0;
-  const double c_lo = rule->node[first];
-  const double c_hi = tally ? 1.0 : rule->node.back();
-
   double local[3] = {0.0, 0.0, 0.0};    // excursion^2, step length^2, jump displacement^2
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
-    double step = 0.0, jmp = 0.0, d0 = 0.0, d1 = 0.0;
+    const bool both = select && select[i];
+    double step = 0.0, jmp = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
     for (int k = 0; k < 3; k++) {
       const double dx = h * vhalf[i][k];
       step += dx * dx;
       jmp += h * h * jump[i][k] * jump[i][k];
       if (xhold) {
         const double a = x[i][k] - xhold[i][k];
-        d0 += (a + c_lo * dx) * (a + c_lo * dx);
-        d1 += (a + c_hi * dx) * (a + c_hi * dx);
+        const double ends[4] = {a + lo * vhalf[i][k], a + hi * vhalf[i][k],
+                                a + lo2 * vhalf[i][k], a + hi2 * vhalf[i][k]};
+        for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
       }
     }
     if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = BLOWUP;
-    local[0] = MAX(local[0], MAX(d0, d1));
+    local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
     local[1] = MAX(local[1], step);
     local[2] = MAX(local[2], jmp);
   }
@@ -788,13 +867,23 @@ int FixPEJump::unpack_exchange(int nlocal, double *buf)
 
 void FixPEJump::write_restart(FILE *fp)
 {
-  double list[4] = {static_cast<double>(started), static_cast<double>(rule->family()),
-                    static_cast<double>(rule->size()), evals_total};
+  double list[NGLOBAL];
+  global_state(list);
   if (comm->me == 0) {
     int size = sizeof(list);
     fwrite(&size, sizeof(int), 1, fp);
-    fwrite(list, sizeof(double), 4, fp);
+    fwrite(list, sizeof(double), NGLOBAL, fp);
   }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::global_state(double *list) const
+{
+  list[0] = started;
+  list[1] = rule->family();
+  list[2] = rule->size();
+  list[3] = evals_total;
 }
 
 /* ---------------------------------------------------------------------- */

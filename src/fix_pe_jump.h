@@ -62,6 +62,9 @@ class FixPEJump : public Fix {
  protected:
   enum Init { INIT_KICK, INIT_PAPER };
 
+  // for derived styles: keywords are parsed from arg[first_keyword] on
+  FixPEJump(class LAMMPS *, int, char **, int first_keyword);
+
   PEJump::Quadrature *rule;
   PEJump::ForceSampler *sampler;
   int init_style;
@@ -95,15 +98,33 @@ class FixPEJump : public Fix {
   bigint cached_step;
   double cached[2];    // pseudo-kinetic and jump energy at cached_step
 
-  void start_scheme(const char *, bool);
+  virtual void start_scheme(const char *, bool);
   void primary_sampled_force();
   void quadrature_sum();
-  void check_excursion();
+  void sample_nodes(int first, int skip, double scale, double offset, const int *select,
+                    double **acc, double **fend);
+  void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
+                       double hi2 = 0.0);
+  void tally_at_node();
+  bool tally_step() const;
   void choose_next_dt();
   void energies();
   void grow_work();
   int detect_velocity_change();
   double pseudo_energy_now();
+  void global_state(double *) const;
+
+  // two-step update of owned atom i with the quadrature sum favg of the
+  // forces over a step of size h: [v]^{n+1} = 2 h favg / m - [v]^n,
+  // v^{n+3/2} = v^{n+1/2} + [v]^{n+1}, node velocity v^{n+1}
+  void jump_atom(int i, double h, const double *favg);
+
+  // hooks for derived styles
+  virtual double kick_step(int) const;    // step size of the initial kick of an atom
+  virtual void store_start_node();        // Lobatto start-node forces at q^0
+  virtual double node_cost();             // evaluations a sampled node costs
+  virtual void check_lists();             // neighbor lists valid for this step's nodes
+  static constexpr int NGLOBAL = 4;       // values of the global restart state
 };
 
 }    // namespace LAMMPS_NS

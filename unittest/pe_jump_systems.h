@@ -85,6 +85,35 @@ inline void fpu_chain(Sim &s, double omega, const double q[6], const double p[6]
           "group walls id 1 8", "group chain id 2:7"});
 }
 
+// the paper's slow/fast chain (section 4.3.1): walls q_0 and q_{2m+1}, m
+// stiff springs (omega^2/4)(q_i - q_{i-1})^2 (i = 1..m) and m+1 soft
+// springs (q_{i+1} - q_i)^4 (i = m..2m), all as bond_style class2 so that
+// fix pe_jump/async can split them; groups fast (q_1..q_m) and walls.
+// Atom i+1 sits at x = i*A + q_i, A = FPU_SPACING.
+inline void slow_fast_chain(Sim &s, int m, double omega2, const std::vector<double> &q,
+                            const std::vector<double> &p)
+{
+  const int n = 2 * m + 2;
+  s.cmds({"units lj", "atom_style bond", "atom_modify map array", "boundary f f f",
+          "region box block -2 " + std::to_string((n + 1) * 1.5) + " -5 5 -5 5",
+          "create_box 1 box bond/types 2 extra/bond/per/atom 2", "mass 1 1.0"});
+  for (int i = 0; i < n; ++i) s.cmd("create_atoms 1 single " + std::to_string(i * 1.5) + " 0 0");
+  for (int i = 0; i < n; ++i) {
+    const int j = s.lmp->atom->map(i + 1);
+    const bool wall = (i == 0) || (i == n - 1);
+    s.lmp->atom->x[j][0] = i * 1.5 + (wall ? 0.0 : q[i - 1]);
+    s.lmp->atom->v[j][0] = wall ? 0.0 : p[i - 1];
+  }
+  s.cmds({"bond_style class2", "bond_coeff 1 1.5 " + std::to_string(0.25 * omega2) + " 0.0 0.0",
+          "bond_coeff 2 1.5 0.0 0.0 1.0"});
+  for (int i = 1; i < n; ++i)
+    s.cmd("create_bonds single/bond " + std::string(i <= m ? "1 " : "2 ") + std::to_string(i) +
+          " " + std::to_string(i + 1));
+  s.cmds({"pair_style zero 1.0", "pair_coeff * *", "comm_modify cutoff 4.0",
+          "group walls id 1 " + std::to_string(n), "group fast id 2:" + std::to_string(m + 1),
+          "group chain id 2:" + std::to_string(n - 1)});
+}
+
 // GNI book initial values: x_1 = 1, y_1 = 1, x_4 = 1/omega, y_4 = 1
 inline void fpu_gni_values(double omega, double q[6], double p[6])
 {

@@ -11,14 +11,30 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 using namespace PEJumpTest;
 
 namespace {
 
-// positions and velocities ordered by atom ID after a short run on nranks ranks;
+// a periodic simple-cubic lattice of bonded atoms with a soft repulsive pair
+// term, exercising bond forces and newton on/off across subdomain boundaries
+void bonded_lattice(Sim &s)
+{
+  s.cmds({"units lj", "atom_style bond", "atom_modify map array", "lattice sc 0.5",
+          "region box block 0 6 0 6 0 6",
+          "create_box 1 box bond/types 1 extra/bond/per/atom 6 extra/special/per/atom 30",
+          "create_atoms 1 box", "mass 1 1.0", "pair_style lj/cut 1.1225", "pair_coeff 1 1 1.0 1.0",
+          "bond_style harmonic", "bond_coeff 1 40.0 1.26", "special_bonds lj 0.0 1.0 1.0",
+          "create_bonds many all all 1 1.2 1.32",
+          "comm_modify cutoff 3.0", "velocity all create 1.0 4928459 loop geom"});
+}
+
+// positions and velocities after a short run on nranks ranks, ordered by the
+// atoms' initial lattice positions (create_atoms numbers atoms differently on
+// different processor grids, so atom IDs cannot be used to match atoms);
 // filled on world rank 0 only
-std::vector<double> run_on(int nranks, const std::string &fix)
+std::vector<double> run_on(int nranks, const std::string &fix, bool bonded)
 {
   int me;
   MPI_Comm_rank(MPI_COMM_WORLD, &me);
@@ -28,14 +44,30 @@ std::vector<double> run_on(int nranks, const std::string &fix)
   if (sub != MPI_COMM_NULL) {
     {
       Sim s(sub);
-      lj_liquid(s, 5);
-      s.cmds({fix, "timestep 0.005", "thermo 20", "run 200 post no"});
+      // fix may start with a line of settings that must precede the box
+      // (newton), separated from the fix command by a newline
+      const size_t eol = fix.find('\n');
+      if (eol != std::string::npos) s.cmd(fix.substr(0, eol));
+      if (bonded)
+        bonded_lattice(s);
+      else
+        lj_liquid(s, 5);
       const int n = static_cast<int>(s.lmp->atom->natoms);
-      std::vector<double> x(3 * n), v(3 * n);
+      std::vector<double> x0(3 * n), x(3 * n), v(3 * n);
+      lammps_gather_atoms(s.lmp, "x", 1, 3, x0.data());
+      s.cmds({fix.substr(eol == std::string::npos ? 0 : eol + 1), "timestep 0.005", "thermo 20",
+              "run 200 post no"});
       lammps_gather_atoms(s.lmp, "x", 1, 3, x.data());
       lammps_gather_atoms(s.lmp, "v", 1, 3, v.data());
-      out = x;
-      out.insert(out.end(), v.begin(), v.end());
+      std::vector<int> order(n);
+      for (int i = 0; i < n; ++i) order[i] = i;
+      const auto key = [&](int i) {
+        return std::make_tuple(std::lround(1e6 * x0[3 * i]), std::lround(1e6 * x0[3 * i + 1]),
+                               std::lround(1e6 * x0[3 * i + 2]));
+      };
+      std::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
+      for (int i : order) out.insert(out.end(), &x[3 * i], &x[3 * i + 3]);
+      for (int i : order) out.insert(out.end(), &v[3 * i], &v[3 * i + 3]);
     }
     MPI_Comm_free(&sub);
   }
@@ -43,38 +75,58 @@ std::vector<double> run_on(int nranks, const std::string &fix)
   return out;
 }
 
-}    // namespace
+// largest difference of positions (minimum image in a cubic box) and velocities
+double max_difference(const std::vector<double> &a, const std::vector<double> &b, double box)
+{
+  const size_t npos = a.size() / 2;
+  double worst = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    double d = b[i] - a[i];
+    if (i < npos) d -= box * std::round(d / box);
+    worst = std::max(worst, std::fabs(d));
+  }
+  return worst;
+}
 
-TEST(PEJumpRanks, SameTrajectoryOn1And2And4Ranks)
+void check_ranks(const std::vector<std::string> &fixes, bool bonded, size_t natoms, double box)
 {
   int nprocs, me;
   MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
   MPI_Comm_rank(MPI_COMM_WORLD, &me);
   ASSERT_EQ(nprocs, 4) << "run this test with 4 MPI ranks";
 
-  for (const std::string fix : {"fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
-                                "fix 1 all pe_jump quadrature legendre 2"}) {
+  for (const auto &fix : fixes) {
     std::map<int, std::vector<double>> result;
-    for (int n : {1, 2, 4}) result[n] = run_on(n, fix);
+    for (int n : {1, 2, 4}) result[n] = run_on(n, fix, bonded);
     if (me != 0) continue;
-    ASSERT_EQ(result[1].size(), 6u * 500u);
+    ASSERT_EQ(result[1].size(), 6 * natoms);
     for (int n : {2, 4}) {
-      // positions are wrapped into the periodic box (5 fcc cells at 0.8442)
-      // at different times on different rank counts: compare minimum images
-      const double box = 5.0 * std::cbrt(4.0 / 0.8442);
-      const size_t npos = result[1].size() / 2;
-      double worst = 0.0;
-      for (size_t i = 0; i < result[1].size(); ++i) {
-        double d = result[n][i] - result[1][i];
-        if (i < npos) d -= box * std::round(d / box);
-        worst = std::max(worst, std::fabs(d));
-      }
-      // 200 steps of a chaotic liquid amplify summation-order round-off
-      // (1e-16) by a few orders of magnitude, no more
+      const double worst = max_difference(result[1], result[n], box);
+      // 200 steps amplify summation-order round-off (1e-16) by a few orders
+      // of magnitude in a chaotic liquid (fix nve: ~5e-13), no more
       EXPECT_LT(worst, 1e-11) << fix << " on " << n << " ranks";
       std::cout << fix << ": max difference 1 vs " << n << " ranks = " << worst << "\n";
     }
   }
+}
+
+}    // namespace
+
+// fix nve is the calibration: its rank-count differences show the round-off
+// amplification of the system, which fix pe_jump must not exceed
+TEST(PEJumpRanks, LJLiquidSameOn1And2And4Ranks)
+{
+  check_ranks({"fix 1 all nve", "fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
+               "fix 1 all pe_jump quadrature legendre 2"},
+              false, 500, 5.0 * std::cbrt(4.0 / 0.8442));
+}
+
+TEST(PEJumpRanks, BondedLatticeSameOn1And2And4Ranks)
+{
+  const double box = 6.0 * std::cbrt(1.0 / 0.5);
+  check_ranks({"fix 1 all nve", "fix 1 all pe_jump quadrature lobatto 3",
+               "newton off\nfix 1 all pe_jump quadrature legendre 3"},
+              true, 216, box);
 }
 
 int main(int argc, char **argv)

@@ -17,12 +17,18 @@
 #include "version.h"
 
 #include "fix_pe_jump.h"
+#include "fix_pe_jump_async.h"
 
 using namespace LAMMPS_NS;
 
 static Fix *pe_jump_creator(LAMMPS *lmp, int argc, char **argv)
 {
   return new FixPEJump(lmp, argc, argv);
+}
+
+static Fix *pe_jump_async_creator(LAMMPS *lmp, int argc, char **argv)
+{
+  return new FixPEJumpAsync(lmp, argc, argv);
 }
 
 extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
@@ -37,5 +43,10 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.author = "PE-JUMP developers";
   plugin.creator.v2 = (lammpsplugin_factory2 *) &pe_jump_creator;
   plugin.handle = handle;
+  (*register_plugin)(&plugin, lmp);
+
+  plugin.name = "pe_jump/async";
+  plugin.info = "asynchronous (slow/fast) pseudo-energy conserving integrator";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &pe_jump_async_creator;
   (*register_plugin)(&plugin, lmp);
 }

@@ -1,0 +1,535 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+/* ----------------------------------------------------------------------
+   Asynchronous (slow/mixed/fast) version of the pseudo-energy conserving
+   scheme, section 4 of: F. Marazzato, A. Ern, C. Mariotti, L. Monasse,
+   Comput. Methods Appl. Mech. Engrg. 347 (2019) 906-927.
+
+   Every LAMMPS time step is a fine step h_F. Atoms of the fast group move
+   and jump on every fine step with the forces of the FINE interactions
+   (those involving a fast-group atom). Slow atoms move in free flight over
+   the coarse step h_S = K h_F; the fine interactions they take part in
+   (mixed-slow) are integrated over each fine step and summed, the COARSE
+   interactions (slow-slow) are integrated once per coarse step at the
+   coarse quadrature nodes, and the slow atoms jump at the coarse nodes.
+------------------------------------------------------------------------- */
+
+#include "fix_pe_jump_async.h"
+
+#include "angle.h"
+#include "atom.h"
+#include "bond.h"
+#include "comm.h"
+#include "dihedral.h"
+#include "error.h"
+#include "force.h"
+#include "group.h"
+#include "improper.h"
+#include "memory.h"
+#include "pair.h"
+#include "pe_jump_force_sampler.h"
+#include "pe_jump_interaction_split.h"
+#include "pe_jump_quadrature.h"
+#include "update.h"
+
+#include <cstring>
+
+using namespace LAMMPS_NS;
+using namespace FixConst;
+using PEJump::ForceSampler;
+using PEJump::InteractionSplit;
+
+static constexpr int NASYNC_GLOBAL = 3;    // K, fine step index, elapsed time
+
+/* ---------------------------------------------------------------------- */
+
+FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
+    FixPEJump(lmp, narg, arg, 5), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
+    reverse_labels(0), split(nullptr), facc(nullptr), fstart_coarse(nullptr), klass(nullptr),
+    fcoarse(nullptr), nmax_coarse(0)
+{
+  if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
+  nfine = utils::inumeric(FLERR, arg[3], false, lmp);
+  if (nfine < 1) error->all(FLERR, "Fix pe_jump/async needs K >= 1 fine steps per coarse step");
+  const int ifast = group->find(arg[4]);
+  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
+  finebit = group->bitmask[ifast];
+
+  if (adapt)
+    error->all(FLERR,
+               "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
+               "steps are fixed (use fix pe_jump for adaptive steps)");
+  if (sample_mask != ForceSampler::ALL)
+    error->all(FLERR, "Fix pe_jump/async samples all force contributions: remove the sample keyword");
+
+  counts[0] = counts[1] = counts[2] = 0.0;
+  split = new InteractionSplit(lmp, groupbit, finebit);
+
+  size_vector = 9;
+  delete[] extlist;
+  extlist = new int[size_vector]{1, 1, 0, 0, 0, 0, 0, 0, 0};
+  peratom_flag = 1;
+  size_peratom_cols = 0;
+  peratom_freq = 1;
+
+  nstate += 4 + (rule->has_end_nodes() ? 3 : 0);
+  FixPEJumpAsync::grow_arrays(atom->nmax);
+  for (int i = 0; i < atom->nlocal; i++) {
+    klass[i] = OUTSIDE;
+    for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+FixPEJumpAsync::~FixPEJumpAsync()
+{
+  delete split;
+  memory->destroy(facc);
+  memory->destroy(fstart_coarse);
+  memory->destroy(klass);
+  memory->destroy(fcoarse);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::setmask()
+{
+  return FixPEJump::setmask() | POST_NEIGHBOR | PRE_FORCE;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::init()
+{
+  FixPEJump::init();
+
+  if (force->pair && force->pair->manybody_flag)
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split the many-body pair style {} into slow and fast "
+               "interactions: use fix pe_jump",
+               force->pair_style);
+  if (force->kspace)
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split k-space ({}) into slow and fast interactions: "
+               "use fix pe_jump",
+               force->kspace_style);
+  const char *hybrid = nullptr;
+  if (force->bond && utils::strmatch(force->bond_style, "^hybrid")) hybrid = "bond";
+  if (force->angle && utils::strmatch(force->angle_style, "^hybrid")) hybrid = "angle";
+  if (force->dihedral && utils::strmatch(force->dihedral_style, "^hybrid")) hybrid = "dihedral";
+  if (force->improper && utils::strmatch(force->improper_style, "^hybrid")) hybrid = "improper";
+  if (hybrid)
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split {}_style hybrid (it keeps its own copies of the "
+               "topology lists): use one {} style with several types",
+               hybrid, hybrid);
+
+  // the fast group must be a non-empty part of the fix group
+
+  const int *mask = atom->mask;
+  bigint local[2] = {0, 0};    // fast atoms in the fix group, fast atoms outside it
+  for (int i = 0; i < atom->nlocal; i++) {
+    if (!(mask[i] & finebit)) continue;
+    if (mask[i] & groupbit)
+      ++local[0];
+    else
+      ++local[1];
+  }
+  bigint global[2];
+  MPI_Allreduce(local, global, 2, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (global[1] > 0)
+    error->all(FLERR, "Fix pe_jump/async: {} atoms of the fast group are not in the fix group {}",
+               global[1], group->names[igroup]);
+  if (global[0] == 0)
+    error->all(FLERR, "Fix pe_jump/async: the fast group has no atoms in the fix group");
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::setup_post_neighbor()
+{
+  post_neighbor();
+}
+
+/* ----------------------------------------------------------------------
+   the lists were rebuilt: split them again (the clocks of the atoms never
+   change, so the split does not depend on when it is done)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::post_neighbor()
+{
+  split->build();
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::setup(int vflag)
+{
+  FixPEJump::setup(vflag);
+  label_classes();
+}
+
+/* ----------------------------------------------------------------------
+   a new start of the two-step scheme also starts a new coarse step
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
+{
+  if (with_start) {
+    fine_index = 0;
+    elapsed = 0.0;
+    for (int i = 0; i < atom->nlocal; i++)
+      for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
+  }
+  FixPEJump::start_scheme(why, with_start);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJumpAsync::kick_step(int i) const
+{
+  return split->coarse(i) ? nfine * update->dt : update->dt;
+}
+
+/* ----------------------------------------------------------------------
+   Lobatto start nodes at q^0: the fine interactions for every atom, the
+   slow interactions for the slow atoms
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::store_start_node()
+{
+  double **f = atom->f;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const size_t nbytes = 3 * sizeof(double) * nlocal;
+  if (nlocal) memcpy(&fsave[0][0], &f[0][0], nbytes);
+
+  split->activate(InteractionSplit::FINE);
+  sampler->compute(ForceSampler::ALL, 0, 0);
+  for (int i = 0; i < nlocal; i++)
+    if (mask[i] & groupbit)
+      for (int k = 0; k < 3; k++) fstart[i][k] = f[i][k];
+
+  split->activate(InteractionSplit::COARSE);
+  sampler->compute(ForceSampler::ALL, 0, 0);
+  for (int i = 0; i < nlocal; i++)
+    if (split->coarse(i))
+      for (int k = 0; k < 3; k++) fstart_coarse[i][k] = f[i][k];
+
+  split->restore();
+  if (nlocal) memcpy(&f[0][0], &fsave[0][0], nbytes);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJumpAsync::node_cost()
+{
+  const auto which = split->active();
+  return (which == InteractionSplit::NONE) ? 1.0 : split->fraction(which);
+}
+
+/* ----------------------------------------------------------------------
+   the Verlet loop evaluates the fine interactions only
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::pre_force(int /*vflag*/)
+{
+  split->activate(InteractionSplit::FINE);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
+{
+  split->restore();
+  FixPEJump::pre_reverse(eflag, vflag);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::find_slow()
+{
+  const int nlocal = atom->nlocal;
+  slow.resize(nlocal);
+  for (int i = 0; i < nlocal; i++) slow[i] = split->coarse(i);
+}
+
+/* ----------------------------------------------------------------------
+   fine nodes for every atom; on the last fine step of a coarse step also
+   the coarse nodes q_S^n + c H v_S of the slow atoms, H the coarse step,
+   measured from the current position q_S^n + elapsed v_S
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::check_lists()
+{
+  find_slow();
+  const int first = rule->has_end_nodes() ? 1 : 0;
+  const double c_lo = rule->node[first];
+  const double c_hi = tally_step() ? 1.0 : rule->node.back();
+  if (fine_index + 1 < nfine) {
+    check_excursion(c_lo * h_step, c_hi * h_step);
+  } else {
+    const double coarse_step = elapsed + h_step;
+    check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), c_lo * coarse_step - elapsed,
+                    rule->node.back() * coarse_step - elapsed);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   fcoarse = sum_k w_k F_slow(q_S^n + c_k H v_S) for the slow atoms, from
+   the positions of the primary fine node; the Lobatto start node is the end
+   node of the previous coarse step
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
+{
+  const int nlocal = atom->nlocal;
+  const int reuse_start = rule->has_end_nodes();
+  for (int i = 0; i < nlocal; i++) {
+    if (!slow[i]) continue;
+    for (int k = 0; k < 3; k++)
+      fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
+  }
+  const double at = elapsed + rule->node[rule->primary()] * h_step;
+  split->activate(InteractionSplit::COARSE);
+  sample_nodes(reuse_start ? 1 : 0, -1, coarse_step, -at, slow.data(), fcoarse,
+               reuse_start ? fstart_coarse : nullptr);
+  split->restore();
+}
+
+/* ----------------------------------------------------------------------
+   forces of the fine interactions at the primary fine node are known:
+   sample the other fine nodes, on the last fine step the coarse nodes, then
+   jump (fast and mixed atoms every fine step, slow atoms at coarse nodes)
+   and move on to the end of the fine step
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::final_integrate()
+{
+  grow_work();
+  if (nmax_coarse < atom->nmax) {
+    nmax_coarse = atom->nmax;
+    memory->destroy(fcoarse);
+    memory->create(fcoarse, nmax_coarse, 3, "pe_jump/async:fcoarse");
+  }
+  find_slow();
+
+  const bool coarse_end = (fine_index + 1 >= nfine);
+  const double coarse_step = elapsed + h_step;
+
+  evals_step = split->fraction(InteractionSplit::FINE);
+  split->activate(InteractionSplit::FINE);
+  quadrature_sum();
+  split->restore();
+  if (coarse_end) coarse_quadrature_sum(coarse_step);
+
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
+  const int keep_start = rule->has_end_nodes();
+
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+    if (keep_start)
+      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+    if (!slow[i]) {
+      jump_atom(i, h_step, fsum[i]);
+      continue;
+    }
+    for (int k = 0; k < 3; k++) facc[i][k] += h_step * fsum[i][k];
+    if (coarse_end) {
+      double favg[3];
+      for (int k = 0; k < 3; k++) {
+        favg[k] = facc[i][k] / coarse_step + fcoarse[i][k];
+        facc[i][k] = 0.0;
+      }
+      jump_atom(i, coarse_step, favg);
+    }
+  }
+
+  tally_at_node();
+  evals_total += evals_step;
+  cached_step = -1;
+
+  if (coarse_end) {
+    fine_index = 0;
+    elapsed = 0.0;
+    label_classes();
+  } else {
+    ++fine_index;
+    elapsed = coarse_step;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   at a coarse node: slow = in the group, not in the fast group; mixed =
+   fast-group atom that shares an interaction with a slow atom; fast = the
+   other fast-group atoms. Also the global counts of the three classes.
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::label_classes()
+{
+  comm->forward_comm();
+  split->mark_interface(interface_flag);
+  reverse_labels = 1;
+  comm->reverse_comm(this, 1);
+  reverse_labels = 0;
+
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  double local[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit))
+      klass[i] = OUTSIDE;
+    else if (split->coarse(i))
+      klass[i] = SLOW;
+    else
+      klass[i] = interface_flag[i] ? MIXED : FAST;
+    if (klass[i] != OUTSIDE) local[static_cast<int>(klass[i])] += 1.0;
+  }
+  MPI_Allreduce(local, counts, 3, MPI_DOUBLE, MPI_SUM, world);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
+{
+  if (!reverse_labels) return FixPEJump::pack_reverse_comm(n, first, buf);
+  for (int i = 0; i < n; i++) buf[i] = interface_flag[first + i];
+  return n;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::unpack_reverse_comm(int n, int *list, double *buf)
+{
+  if (!reverse_labels) {
+    FixPEJump::unpack_reverse_comm(n, list, buf);
+    return;
+  }
+  for (int i = 0; i < n; i++)
+    if (buf[i] != 0.0) interface_flag[list[i]] = 1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJumpAsync::compute_vector(int n)
+{
+  switch (n) {
+    case 5:
+      return (fine_index == 0) ? 1.0 : 0.0;
+    case 6:
+    case 7:
+    case 8:
+      return counts[n - 6];
+  }
+  return FixPEJump::compute_vector(n);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::grow_arrays(int nmax)
+{
+  FixPEJump::grow_arrays(nmax);
+  memory->grow(facc, nmax, 3, "pe_jump/async:facc");
+  if (rule->has_end_nodes()) memory->grow(fstart_coarse, nmax, 3, "pe_jump/async:fstart_coarse");
+  memory->grow(klass, nmax, "pe_jump/async:klass");
+  vector_atom = klass;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::copy_arrays(int i, int j, int delflag)
+{
+  FixPEJump::copy_arrays(i, j, delflag);
+  for (int k = 0; k < 3; k++) {
+    facc[j][k] = facc[i][k];
+    if (fstart_coarse) fstart_coarse[j][k] = fstart_coarse[i][k];
+  }
+  klass[j] = klass[i];
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::pack_exchange(int i, double *buf)
+{
+  int m = FixPEJump::pack_exchange(i, buf);
+  for (int k = 0; k < 3; k++) buf[m++] = facc[i][k];
+  if (fstart_coarse)
+    for (int k = 0; k < 3; k++) buf[m++] = fstart_coarse[i][k];
+  buf[m++] = klass[i];
+  return m;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::unpack_exchange(int nlocal, double *buf)
+{
+  int m = FixPEJump::unpack_exchange(nlocal, buf);
+  for (int k = 0; k < 3; k++) facc[nlocal][k] = buf[m++];
+  if (fstart_coarse)
+    for (int k = 0; k < 3; k++) fstart_coarse[nlocal][k] = buf[m++];
+  klass[nlocal] = buf[m++];
+  return m;
+}
+
+/* ----------------------------------------------------------------------
+   global state: that of fix pe_jump, K, the position inside the coarse step
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::write_restart(FILE *fp)
+{
+  double list[NGLOBAL + NASYNC_GLOBAL];
+  global_state(list);
+  list[NGLOBAL] = nfine;
+  list[NGLOBAL + 1] = fine_index;
+  list[NGLOBAL + 2] = elapsed;
+  if (comm->me == 0) {
+    int size = sizeof(list);
+    fwrite(&size, sizeof(int), 1, fp);
+    fwrite(list, sizeof(double), NGLOBAL + NASYNC_GLOBAL, fp);
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::restart(char *buf)
+{
+  FixPEJump::restart(buf);
+  auto *list = reinterpret_cast<double *>(buf);
+  if (static_cast<int>(list[NGLOBAL]) != nfine) {
+    if (started && (comm->me == 0))
+      utils::logmesg(lmp,
+                     "Fix {}: K differs from the restart file: the two-step scheme restarts "
+                     "from the current state\n",
+                     style);
+    started = 0;
+    return;
+  }
+  fine_index = static_cast<int>(list[NGLOBAL + 1]);
+  elapsed = list[NGLOBAL + 2];
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJumpAsync::memory_usage()
+{
+  double bytes = FixPEJump::memory_usage();
+  bytes += (double) atom->nmax * sizeof(double) * (3 + (fstart_coarse ? 3 : 0) + 1);
+  bytes += (double) nmax_coarse * 3 * sizeof(double);
+  return bytes;
+}

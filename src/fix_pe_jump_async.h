@@ -1,0 +1,95 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifdef FIX_CLASS
+// clang-format off
+FixStyle(pe_jump/async,FixPEJumpAsync);
+// clang-format on
+#else
+
+#ifndef LMP_FIX_PE_JUMP_ASYNC_H
+#define LMP_FIX_PE_JUMP_ASYNC_H
+
+#include "fix_pe_jump.h"
+
+#include <vector>
+
+namespace LAMMPS_NS {
+namespace PEJump {
+  class InteractionSplit;
+}
+
+class FixPEJumpAsync : public FixPEJump {
+ public:
+  FixPEJumpAsync(class LAMMPS *, int, char **);
+  ~FixPEJumpAsync() override;
+
+  int setmask() override;
+  void init() override;
+  void setup(int) override;
+  void setup_post_neighbor() override;
+  void post_neighbor() override;
+  void pre_force(int) override;
+  void pre_reverse(int, int) override;
+  void final_integrate() override;
+
+  double compute_vector(int) override;
+
+  void grow_arrays(int) override;
+  void copy_arrays(int, int, int) override;
+  int pack_exchange(int, double *) override;
+  int unpack_exchange(int, double *) override;
+  void write_restart(FILE *) override;
+  void restart(char *) override;
+  int pack_reverse_comm(int, int, double *) override;
+  void unpack_reverse_comm(int, int *, double *) override;
+  double memory_usage() override;
+
+ protected:
+  enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
+
+  int nfine;            // K: fine steps per coarse step
+  int finebit;          // group bit of the fast group
+  int fine_index;       // fine steps done in the current coarse step
+  double elapsed;       // time elapsed in the current coarse step
+  double counts[3];     // global number of slow, mixed, fast atoms
+  int reverse_labels;   // reverse communication carries interface flags
+
+  PEJump::InteractionSplit *split;
+
+  // per-atom state: the quadrature sum of the forces on slow atoms over the
+  // fine steps done in this coarse step (force x time), (Lobatto rules) the
+  // slow-interaction force at the coarse start node, and the class
+  double **facc, **fstart_coarse;
+  double *klass;
+
+  double **fcoarse;     // work: coarse quadrature sum of the slow interactions
+  int nmax_coarse;
+  std::vector<int> slow;             // owned atoms: 1 if on the coarse clock
+  std::vector<int> interface_flag;   // owned and ghost atoms: fine with a slow partner
+
+  void start_scheme(const char *, bool) override;
+  double kick_step(int) const override;
+  void store_start_node() override;
+  double node_cost() override;
+  void check_lists() override;
+
+  void find_slow();
+  void coarse_quadrature_sum(double coarse_step);
+  void label_classes();
+};
+
+}    // namespace LAMMPS_NS
+
+#endif
+#endif

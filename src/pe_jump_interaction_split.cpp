@@ -1,0 +1,237 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#include "pe_jump_interaction_split.h"
+
+#include "atom.h"
+#include "force.h"
+#include "neigh_list.h"
+#include "neighbor.h"
+#include "pair.h"
+
+using namespace LAMMPS_NS;
+using namespace LAMMPS_NS::PEJump;
+
+/* ---------------------------------------------------------------------- */
+
+InteractionSplit::InteractionSplit(LAMMPS *lmp, int group, int fast) :
+    Pointers(lmp), groupbit(group), finebit(fast), current(NONE)
+{
+  frac[FINE] = frac[COARSE] = 0.0;
+  topo[0] = {&neighbor->nbondlist, &neighbor->bondlist, 2, 0, nullptr, {}};
+  topo[1] = {&neighbor->nanglelist, &neighbor->anglelist, 3, 0, nullptr, {}};
+  topo[2] = {&neighbor->ndihedrallist, &neighbor->dihedrallist, 4, 0, nullptr, {}};
+  topo[3] = {&neighbor->nimproperlist, &neighbor->improperlist, 4, 0, nullptr, {}};
+}
+
+/* ---------------------------------------------------------------------- */
+
+InteractionSplit::~InteractionSplit()
+{
+  restore();
+}
+
+int InteractionSplit::fine(int i) const
+{
+  const int m = atom->mask[i];
+  return (m & groupbit) && (m & finebit);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int InteractionSplit::coarse(int i) const
+{
+  const int m = atom->mask[i];
+  return (m & groupbit) && !(m & finebit);
+}
+
+/* ----------------------------------------------------------------------
+   FINE if any of the atoms is on the fine clock, else COARSE
+------------------------------------------------------------------------- */
+
+int InteractionSplit::klass(const int *atoms, int n) const
+{
+  for (int k = 0; k < n; k++)
+    if (fine(atoms[k])) return FINE;
+  return COARSE;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::build()
+{
+  restore();
+
+  // perpetual neighbor lists requested by pair styles (one for a plain pair
+  // style, one per sub-style for pair hybrid)
+
+  pairs.clear();
+  cross.clear();
+  for (int n = 0; n < neighbor->nlist; n++) {
+    NeighList *list = neighbor->lists[n];
+    if (!list || list->occasional || (list->requestor_type != NeighList::PAIR)) continue;
+    pairs.push_back({list, nullptr, nullptr, {}});
+    split_pairs(pairs.back());
+  }
+
+  double local[3] = {0.0, 0.0, 0.0};    // interactions: fine, coarse, all
+  for (const auto &p : pairs)
+    for (int s = 0; s < 2; s++)
+      for (int ii = 0; ii < p.list->inum; ii++) local[s] += p.part[s].numneigh[p.list->ilist[ii]];
+
+  if (atom->molecular != Atom::ATOMIC) {
+    for (auto &t : topo) {
+      split_topology(t);
+      local[FINE] += t.part[FINE].size();
+      local[COARSE] += t.part[COARSE].size();
+    }
+  }
+  local[2] = local[FINE] + local[COARSE];
+
+  double global[3];
+  MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_SUM, world);
+  for (int s = 0; s < 2; s++) frac[s] = (global[2] > 0.0) ? global[s] / global[2] : 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::split_pairs(PairList &p)
+{
+  NeighList *list = p.list;
+  const int nall = atom->nlocal + atom->nghost;
+  const int inum = list->inum;
+  const int *ilist = list->ilist;
+
+  for (auto &part : p.part) {
+    part.numneigh.assign(nall, 0);
+    part.firstneigh.assign(nall, nullptr);
+    part.neigh.clear();
+  }
+
+  // first pass: sizes, so that the neighbor storage is not reallocated later
+
+  size_t total[2] = {0, 0};
+  for (int ii = 0; ii < inum; ii++) {
+    const int i = ilist[ii];
+    const int *jlist = list->firstneigh[i];
+    for (int jj = 0; jj < list->numneigh[i]; jj++) {
+      const int j = jlist[jj] & NEIGHMASK;
+      const int atoms[2] = {i, j};
+      ++total[klass(atoms, 2)];
+    }
+  }
+  for (int s = 0; s < 2; s++) p.part[s].neigh.reserve(total[s]);
+
+  for (int ii = 0; ii < inum; ii++) {
+    const int i = ilist[ii];
+    const int *jlist = list->firstneigh[i];
+    size_t start[2] = {p.part[FINE].neigh.size(), p.part[COARSE].neigh.size()};
+    for (int jj = 0; jj < list->numneigh[i]; jj++) {
+      const int j = jlist[jj] & NEIGHMASK;
+      const int atoms[2] = {i, j};
+      const int s = klass(atoms, 2);
+      p.part[s].neigh.push_back(jlist[jj]);
+      if ((s == FINE) && (coarse(i) || coarse(j))) {
+        cross.push_back(i);
+        cross.push_back(j);
+      }
+    }
+    for (int s = 0; s < 2; s++) {
+      auto &part = p.part[s];
+      part.numneigh[i] = static_cast<int>(part.neigh.size() - start[s]);
+      part.firstneigh[i] = part.neigh.data() + start[s];
+    }
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::split_topology(TopoList &t)
+{
+  t.nfull = *t.count;
+  t.full = *t.list;
+  t.part[FINE].clear();
+  t.part[COARSE].clear();
+  for (int n = 0; n < t.nfull; n++) t.part[klass(t.full[n], t.natoms)].push_back(t.full[n]);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::activate(Subset which)
+{
+  restore();
+  for (auto &p : pairs) {
+    p.numneigh = p.list->numneigh;
+    p.firstneigh = p.list->firstneigh;
+    p.list->numneigh = p.part[which].numneigh.data();
+    p.list->firstneigh = p.part[which].firstneigh.data();
+  }
+  if (atom->molecular != Atom::ATOMIC) {
+    for (auto &t : topo) {
+      *t.count = static_cast<int>(t.part[which].size());
+      *t.list = t.part[which].data();
+    }
+  }
+  current = which;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::restore()
+{
+  if (current == NONE) return;
+  for (auto &p : pairs) {
+    p.list->numneigh = p.numneigh;
+    p.list->firstneigh = p.firstneigh;
+  }
+  if (atom->molecular != Atom::ATOMIC) {
+    for (auto &t : topo) {
+      *t.count = t.nfull;
+      *t.list = t.full;
+    }
+  }
+  current = NONE;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::mark_interface(std::vector<int> &flag) const
+{
+  const int nall = atom->nlocal + atom->nghost;
+  flag.assign(nall, 0);
+
+  double **x = atom->x;
+  const int *type = atom->type;
+  double **cutsq = force->pair ? force->pair->cutsq : nullptr;
+  for (size_t n = 0; n < cross.size(); n += 2) {
+    const int i = cross[n], j = cross[n + 1];
+    const double dx = x[i][0] - x[j][0];
+    const double dy = x[i][1] - x[j][1];
+    const double dz = x[i][2] - x[j][2];
+    if (cutsq && (dx * dx + dy * dy + dz * dz < cutsq[type[i]][type[j]])) {
+      if (fine(i)) flag[i] = 1;
+      if (fine(j)) flag[j] = 1;
+    }
+  }
+
+  if (atom->molecular == Atom::ATOMIC) return;
+  for (const auto &t : topo) {
+    for (const int *entry : t.part[FINE]) {
+      bool slow = false;
+      for (int k = 0; k < t.natoms; k++) slow = slow || coarse(entry[k]);
+      if (!slow) continue;
+      for (int k = 0; k < t.natoms; k++)
+        if (fine(entry[k])) flag[entry[k]] = 1;
+    }
+  }
+}

@@ -1,0 +1,102 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_INTERACTION_SPLIT_H
+#define LMP_PE_JUMP_INTERACTION_SPLIT_H
+
+#include "pointers.h"
+
+#include <vector>
+
+namespace LAMMPS_NS {
+class NeighList;
+namespace PEJump {
+
+  // Splits the interactions of the force field (pairs of the pair styles'
+  // neighbor lists, bonds, angles, dihedrals, impropers) by the clocks of
+  // the atoms they involve: an interaction that involves an atom on the
+  // fine clock belongs to the FINE subset, every other one (only atoms on
+  // the coarse clock, or atoms that are not integrated) to the COARSE
+  // subset. While a subset is active, the neighbor lists of the pair styles
+  // and the topology lists of the neighbor class hold only its interactions,
+  // so that the force styles compute only those.
+
+  class InteractionSplit : protected Pointers {
+   public:
+    enum Subset { FINE = 0, COARSE = 1, NONE = 2 };
+
+    InteractionSplit(class LAMMPS *, int groupbit, int finebit);
+    ~InteractionSplit() override;
+
+    // 1 if atom i (owned or ghost) is integrated on the fine clock
+    int fine(int i) const;
+    // 1 if atom i (owned or ghost) is integrated on the coarse clock
+    int coarse(int i) const;
+
+    // build both subsets from the current neighbor and topology lists;
+    // collective call, after every neighbor list build
+    void build();
+
+    // swap the lists of one subset in, and the complete lists back
+    void activate(Subset);
+    void restore();
+    Subset active() const { return current; }
+
+    // fraction of all interactions that a subset holds (global)
+    double fraction(Subset which) const { return frac[which]; }
+
+    // flag[i] = 1 for every atom i (owned or ghost) on the fine clock that
+    // shares an interaction with an atom on the coarse clock: a bonded one,
+    // or a pair closer than the pair style's cutoff
+    void mark_interface(std::vector<int> &flag) const;
+
+   private:
+    int groupbit, finebit;
+    Subset current;
+    double frac[2];
+
+    // one pair neighbor list, its original arrays and both subsets
+    struct PairSubset {
+      std::vector<int> numneigh;
+      std::vector<int *> firstneigh;
+      std::vector<int> neigh;
+    };
+    struct PairList {
+      NeighList *list;
+      int *numneigh;
+      int **firstneigh;
+      PairSubset part[2];
+    };
+    std::vector<PairList> pairs;
+    std::vector<int> cross;    // pairs (i,j) of a fine and a coarse atom
+
+    // one topology list (bonds, angles, ...) of the neighbor class
+    struct TopoList {
+      int *count;
+      int ***list;
+      int natoms;        // atoms per entry
+      int nfull;         // entries of the complete list
+      int **full;        // the complete list
+      std::vector<int *> part[2];
+    };
+    TopoList topo[4];
+
+    int klass(const int *atoms, int n) const;
+    void split_pairs(PairList &);
+    void split_topology(TopoList &);
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif
