@@ -118,10 +118,12 @@ void ForceSampler::recount()
     const NeighList *list = force->pair->list;
     for (int ii = 0; ii < list->inum; ++ii) local[0] += list->numneigh[list->ilist[ii]];
   }
-  local[1] = neighbor->nbondlist;
-  local[2] = neighbor->nanglelist;
-  local[3] = neighbor->ndihedrallist;
-  local[4] = neighbor->nimproperlist;
+  // the neighbor class sets the topology list sizes only for styles that exist
+  const int have = present();
+  if (have & BOND) local[1] = neighbor->nbondlist;
+  if (have & ANGLE) local[2] = neighbor->nanglelist;
+  if (have & DIHEDRAL) local[3] = neighbor->ndihedrallist;
+  if (have & IMPROPER) local[4] = neighbor->nimproperlist;
   MPI_Allreduce(local, count, 5, MPI_DOUBLE, MPI_SUM, world);
   counted_at = neighbor->ncalls;
 }

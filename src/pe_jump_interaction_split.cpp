@@ -28,10 +28,10 @@ InteractionSplit::InteractionSplit(LAMMPS *lmp, int group, int fast) :
     Pointers(lmp), groupbit(group), finebit(fast), current(NONE)
 {
   frac[FINE] = frac[COARSE] = 0.0;
-  topo[0] = {&neighbor->nbondlist, &neighbor->bondlist, 2, 0, nullptr, {}};
-  topo[1] = {&neighbor->nanglelist, &neighbor->anglelist, 3, 0, nullptr, {}};
-  topo[2] = {&neighbor->ndihedrallist, &neighbor->dihedrallist, 4, 0, nullptr, {}};
-  topo[3] = {&neighbor->nimproperlist, &neighbor->improperlist, 4, 0, nullptr, {}};
+  topo[0] = {0, &neighbor->nbondlist, &neighbor->bondlist, 2, 0, nullptr, {}};
+  topo[1] = {0, &neighbor->nanglelist, &neighbor->anglelist, 3, 0, nullptr, {}};
+  topo[2] = {0, &neighbor->ndihedrallist, &neighbor->dihedrallist, 4, 0, nullptr, {}};
+  topo[3] = {0, &neighbor->nimproperlist, &neighbor->improperlist, 4, 0, nullptr, {}};
 }
 
 /* ---------------------------------------------------------------------- */
@@ -89,8 +89,13 @@ void InteractionSplit::build()
     for (int s = 0; s < 2; s++)
       for (int ii = 0; ii < p.list->inum; ii++) local[s] += p.part[s].numneigh[p.list->ilist[ii]];
 
-  if (atom->molecular != Atom::ATOMIC) {
-    for (auto &t : topo) {
+  const bool molecular = (atom->molecular != Atom::ATOMIC);
+  topo[0].on = molecular && force->bond;
+  topo[1].on = molecular && force->angle;
+  topo[2].on = molecular && force->dihedral;
+  topo[3].on = molecular && force->improper;
+  for (auto &t : topo) {
+    if (t.on) {
       split_topology(t);
       local[FINE] += t.part[FINE].size();
       local[COARSE] += t.part[COARSE].size();
@@ -176,11 +181,10 @@ void InteractionSplit::activate(Subset which)
     p.list->numneigh = p.part[which].numneigh.data();
     p.list->firstneigh = p.part[which].firstneigh.data();
   }
-  if (atom->molecular != Atom::ATOMIC) {
-    for (auto &t : topo) {
-      *t.count = static_cast<int>(t.part[which].size());
-      *t.list = t.part[which].data();
-    }
+  for (auto &t : topo) {
+    if (!t.on) continue;
+    *t.count = static_cast<int>(t.part[which].size());
+    *t.list = t.part[which].data();
   }
   current = which;
 }
@@ -194,11 +198,10 @@ void InteractionSplit::restore()
     p.list->numneigh = p.numneigh;
     p.list->firstneigh = p.firstneigh;
   }
-  if (atom->molecular != Atom::ATOMIC) {
-    for (auto &t : topo) {
-      *t.count = t.nfull;
-      *t.list = t.full;
-    }
+  for (auto &t : topo) {
+    if (!t.on) continue;
+    *t.count = t.nfull;
+    *t.list = t.full;
   }
   current = NONE;
 }
@@ -224,8 +227,8 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
     }
   }
 
-  if (atom->molecular == Atom::ATOMIC) return;
   for (const auto &t : topo) {
+    if (!t.on) continue;
     for (const int *entry : t.part[FINE]) {
       bool slow = false;
       for (int k = 0; k < t.natoms; k++) slow = slow || coarse(entry[k]);

@@ -82,6 +82,7 @@ namespace PEJump {
 
     // one topology list (bonds, angles, ...) of the neighbor class
     struct TopoList {
+      int on;    // the style exists, so that the neighbor class builds this list
       int *count;
       int ***list;
       int natoms;        // atoms per entry

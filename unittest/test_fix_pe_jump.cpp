@@ -667,12 +667,3 @@ TEST(PEJump, BadInputGivesClearErrors)
                                            "fix 1 all pe_jump"};
   EXPECT_THAT(error_of(sphere, "run 1"), ContainsRegex("integrates point particles only"));
 }
-
-int main(int argc, char **argv)
-{
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleMock(&argc, argv);
-  const int rv = RUN_ALL_TESTS();
-  MPI_Finalize();
-  return rv;
-}

@@ -8,6 +8,8 @@
 
 #include "gtest/gtest.h"
 
+#include "utils.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -44,10 +46,12 @@ std::vector<double> run_on(int nranks, const std::string &fix, bool bonded)
   if (sub != MPI_COMM_NULL) {
     {
       Sim s(sub);
-      // fix may start with a line of settings that must precede the box
-      // (newton), separated from the fix command by a newline
-      const size_t eol = fix.find('\n');
-      if (eol != std::string::npos) s.cmd(fix.substr(0, eol));
+      // fix holds one or more commands separated by newlines; "newton"
+      // must precede the box, the others follow the system set-up
+      std::vector<std::string> before, after;
+      for (const auto &line : LAMMPS_NS::utils::split_lines(fix))
+        (LAMMPS_NS::utils::strmatch(line, "^newton") ? before : after).push_back(line);
+      s.cmds(before);
       if (bonded)
         bonded_lattice(s);
       else
@@ -55,8 +59,8 @@ std::vector<double> run_on(int nranks, const std::string &fix, bool bonded)
       const int n = static_cast<int>(s.lmp->atom->natoms);
       std::vector<double> x0(3 * n), x(3 * n), v(3 * n);
       lammps_gather_atoms(s.lmp, "x", 1, 3, x0.data());
-      s.cmds({fix.substr(eol == std::string::npos ? 0 : eol + 1), "timestep 0.005", "thermo 20",
-              "run 200 post no"});
+      s.cmds(after);
+      s.cmds({"timestep 0.005", "thermo 20", "run 200 post no"});
       lammps_gather_atoms(s.lmp, "x", 1, 3, x.data());
       lammps_gather_atoms(s.lmp, "v", 1, 3, v.data());
       std::vector<int> order(n);
@@ -116,16 +120,24 @@ void check_ranks(const std::vector<std::string> &fixes, bool bonded, size_t nato
 // amplification of the system, which fix pe_jump must not exceed
 TEST(PEJumpRanks, LJLiquidSameOn1And2And4Ranks)
 {
+  const std::string slab = "region slab block 0 2 INF INF INF INF units lattice\n"
+                           "group fast region slab\n";
   check_ranks({"fix 1 all nve", "fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
-               "fix 1 all pe_jump quadrature legendre 2"},
+               "fix 1 all pe_jump quadrature legendre 2",
+               slab + "fix 1 all pe_jump/async 4 fast quadrature lobatto 3",
+               slab + "fix 1 all pe_jump/async 3 fast"},
               false, 500, 5.0 * std::cbrt(4.0 / 0.8442));
 }
 
 TEST(PEJumpRanks, BondedLatticeSameOn1And2And4Ranks)
 {
   const double box = 6.0 * std::cbrt(1.0 / 0.5);
+  const std::string core = "region core block 0 3 0 3 0 6 units lattice\n"
+                           "group fast region core\n";
   check_ranks({"fix 1 all nve", "fix 1 all pe_jump quadrature lobatto 3",
-               "newton off\nfix 1 all pe_jump quadrature legendre 3"},
+               "newton off\nfix 1 all pe_jump quadrature legendre 3",
+               core + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3",
+               "newton off\n" + core + "fix 1 all pe_jump/async 5 fast"},
               true, 216, box);
 }
 

@@ -1,0 +1,454 @@
+// physics and interface tests of fix pe_jump/async through the LAMMPS C++
+// API: classification, equality with fix pe_jump for K = 1, pseudo-energy
+// conservation at coarse nodes, convergence orders, evaluation counts
+// against the paper's formulas and against the work the force styles see,
+// split runs and restarts inside a coarse step, error messages
+
+#include "pe_jump_systems.h"
+
+#include "bond_class2.h"
+#include "domain.h"
+#include "exceptions.h"
+#include "force.h"
+#include "group.h"
+#include "neigh_list.h"
+#include "neighbor.h"
+#include "pair_lj_cut.h"
+
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+
+#include <algorithm>
+#include <cmath>
+
+using namespace PEJumpTest;
+using ::testing::ContainsRegex;
+
+namespace {
+
+constexpr int M = 3;
+constexpr double OMEGA2 = 10.0;
+const std::vector<double> Q0 = {0.1, -0.05, 0.02, 0.3, -0.2, 0.1};
+const std::vector<double> P0 = {0.5, 0.0, 0.0, 0.0, 1.0, 0.0};
+
+void chain(Sim &s)
+{
+  slow_fast_chain(s, M, OMEGA2, Q0, P0);
+}
+
+// positions q_1..q_2m of the chain (x minus the lattice site)
+std::vector<double> chain_q(Sim &s)
+{
+  std::vector<double> q;
+  for (int id = 2; id <= 2 * M + 1; ++id) q.push_back(s.x(id, 0) - (id - 1) * FPU_SPACING);
+  return q;
+}
+
+double max_diff(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double d = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, std::fabs(a[i] - b[i]));
+  return d;
+}
+
+// chain at time T with fix pe_jump/async (K >= 1) or fix pe_jump (K = 0)
+std::vector<double> chain_at(double T, double hf, int K, const std::string &rule)
+{
+  Sim s;
+  chain(s);
+  const std::string fix = K ? fmt::format("fix 1 chain pe_jump/async {} fast quadrature {}", K, rule)
+                            : "fix 1 chain pe_jump quadrature " + rule;
+  const int nsteps = static_cast<int>(std::lround(T / hf));
+  s.cmds({fix, fmt::format("timestep {:.17g}", hf), "thermo 0",
+          fmt::format("run {} post no", nsteps)});
+  return chain_q(s);
+}
+
+std::string error_of(const std::vector<std::string> &setup, const std::string &failing)
+{
+  Sim s;
+  try {
+    s.cmds(setup);
+    s.cmd(failing);
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}    // namespace
+
+/* ----------------------------------------------------------------------
+   classes on the paper's chain: q_1, q_2 fast, q_3 mixed, q_4..q_6 slow
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, ClassifiesSlowMixedFast)
+{
+  Sim s;
+  chain(s);
+  s.cmds({"fix 1 chain pe_jump/async 10 fast", "timestep 1e-3", "thermo 0", "run 0 post no"});
+  EXPECT_EQ(s.vec("1", 6), 3.0);    // slow
+  EXPECT_EQ(s.vec("1", 7), 1.0);    // mixed
+  EXPECT_EQ(s.vec("1", 8), 2.0);    // fast
+  const double *klass = s.lmp->modify->get_fix_by_id("1")->vector_atom;
+  const double expected[8] = {-1, 2, 2, 1, 0, 0, 0, -1};
+  for (int id = 1; id <= 8; ++id) EXPECT_EQ(klass[s.lmp->atom->map(id)], expected[id - 1]) << id;
+  // coarse-node flag: 1 at coarse nodes only
+  s.cmd("run 3 post no");
+  EXPECT_EQ(s.vec("1", 5), 0.0);
+  s.cmd("run 7 post no");
+  EXPECT_EQ(s.vec("1", 5), 1.0);
+}
+
+/* ----------------------------------------------------------------------
+   K = 1: every step is a coarse step, the scheme is fix pe_jump
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, OneFineStepPerCoarseStepIsTheSynchronousScheme)
+{
+  for (const std::string rule : {"midpoint", "lobatto 3", "legendre 2", "lobatto 5"}) {
+    const auto sync = chain_at(5.0, 1e-3, 0, rule);
+    const auto async = chain_at(5.0, 1e-3, 1, rule);
+    EXPECT_LT(max_diff(sync, async), 1e-13) << rule;
+  }
+  // with pairs: an LJ liquid, a slab of it on the fine clock
+  std::vector<double> out[2];
+  for (int k = 0; k < 2; ++k) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"region slab block 0 2 INF INF INF INF units lattice", "group fast region slab",
+            k ? "fix 1 all pe_jump/async 1 fast quadrature lobatto 3"
+              : "fix 1 all pe_jump quadrature lobatto 3",
+            "timestep 0.005", "thermo 0", "run 100 post no"});
+    for (int id = 1; id <= s.lmp->atom->natoms; ++id) {
+      double unwrap[3];
+      const int i = s.lmp->atom->map(id);
+      s.lmp->domain->unmap(s.lmp->atom->x[i], s.lmp->atom->image[i], unwrap);
+      out[k].insert(out[k].end(), unwrap, unwrap + 3);
+    }
+  }
+  EXPECT_LT(max_diff(out[0], out[1]), 1e-11);
+}
+
+/* ----------------------------------------------------------------------
+   pseudo-energy conserved at coarse nodes for exact quadrature: the quartic
+   springs have cubic forces along straight lines, exact for lobatto 3
+------------------------------------------------------------------------- */
+
+namespace {
+// max relative deviation of pe + f_1 at coarse nodes over ncoarse coarse steps
+double coarse_node_drift(Sim &s, int K, int ncoarse)
+{
+  s.cmds({"thermo 0", "run 0 post no"});
+  const double h0 = s.eval("c_thermo_pe+f_1");
+  double worst = 0.0;
+  for (int n = 0; n < ncoarse; ++n) {
+    s.cmd(fmt::format("run {} pre no post no", K));
+    EXPECT_EQ(s.vec("1", 5), 1.0);
+    worst = std::max(worst, std::fabs(s.eval("c_thermo_pe+f_1") - h0));
+  }
+  return worst / std::fabs(h0);
+}
+}    // namespace
+
+TEST(PEJumpAsync, PseudoEnergyConservedAtCoarseNodes)
+{
+  {
+    Sim s;
+    chain(s);
+    s.cmds({"fix 1 chain pe_jump/async 50 fast quadrature lobatto 3", "timestep 2e-4"});
+    const double drift = coarse_node_drift(s, 50, 1000);
+    std::cout << "slow/fast quartic chain, lobatto 3, K=50: " << drift << "\n";
+    // 50000 fine steps, coordinates of order 10, energy 0.08: round-off of
+    // the energy is ~1e-14 relative per step, a random walk of it ~3e-12
+    // (fix pe_jump at h_F over the same time: 1e-12)
+    EXPECT_LT(drift, 3e-12);
+  }
+  {
+    // a harmonic ring (periodic), half of it fast, stiff springs there
+    Sim s;
+    harmonic_ring(s, 20, 10.0, 1.0, 7);
+    s.cmds({"bond_coeff 1 10.0 1.0", "group fast id 1:10",
+            "fix 1 all pe_jump/async 7 fast quadrature midpoint", "timestep 0.01"});
+    const double drift = coarse_node_drift(s, 7, 1000);
+    std::cout << "harmonic ring, midpoint, K=7: " << drift << "\n";
+    EXPECT_LT(drift, 3e-12);
+  }
+  {
+    // the midpoint rule is not exact on quartic springs: the pseudo-energy
+    // varies, which shows that the test above can fail
+    Sim s;
+    chain(s);
+    s.cmds({"fix 1 chain pe_jump/async 50 fast quadrature midpoint", "timestep 2e-4"});
+    EXPECT_GT(coarse_node_drift(s, 50, 200), 1e-9);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   second order: in h_S at fixed h_F (error against the synchronous scheme
+   at h_F, as in the paper), and with h_S/h_F = 25 fixed (error against a
+   converged reference)
+------------------------------------------------------------------------- */
+
+namespace {
+double order(const std::vector<double> &h, const std::vector<double> &err)
+{
+  // least-squares slope of log(err) against log(h)
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const double n = h.size();
+  for (size_t i = 0; i < h.size(); ++i) {
+    const double x = std::log(h[i]), y = std::log(err[i]);
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+  }
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+}    // namespace
+
+TEST(PEJumpAsync, SecondOrderInCoarseStepAndAtFixedRatio)
+{
+  const double T = 2.0, hf = 1e-4;
+  const auto ref = chain_at(T, hf, 0, "lobatto 5");
+  std::vector<double> hs, err;
+  for (int K : {40, 80, 160, 320}) {
+    hs.push_back(K * hf);
+    err.push_back(max_diff(ref, chain_at(T, hf, K, "lobatto 5")));
+  }
+  const double p1 = order(hs, err);
+  std::cout << "order in h_S at h_F = 1e-4: " << p1 << "\n";
+  EXPECT_NEAR(p1, 2.0, 0.1);
+
+  const auto exact = chain_at(T, 2e-5, 0, "lobatto 5");
+  std::vector<double> hs2, err2;
+  for (double h : {1e-2, 5e-3, 2.5e-3, 1.25e-3}) {
+    hs2.push_back(h);
+    err2.push_back(max_diff(exact, chain_at(T, h / 25, 25, "lobatto 5")));
+  }
+  const double p2 = order(hs2, err2);
+  std::cout << "order at h_S/h_F = 25: " << p2 << "\n";
+  EXPECT_NEAR(p2, 2.0, 0.1);
+}
+
+/* ----------------------------------------------------------------------
+   cost: the paper's N_a and N_s on the slow/fast chain, and the reported
+   counts equal the interactions the force styles actually computed
+------------------------------------------------------------------------- */
+
+namespace {
+class BondCounting : public LAMMPS_NS::BondClass2 {
+ public:
+  using BondClass2::BondClass2;
+  static double computed;
+  void compute(int eflag, int vflag) override
+  {
+    computed += neighbor->nbondlist;
+    BondClass2::compute(eflag, vflag);
+  }
+};
+double BondCounting::computed = 0.0;
+LAMMPS_NS::Bond *bond_counting_creator(LAMMPS_NS::LAMMPS *lmp)
+{
+  return new BondCounting(lmp);
+}
+
+class PairCounting : public LAMMPS_NS::PairLJCut {
+ public:
+  using PairLJCut::PairLJCut;
+  static double computed;
+  void compute(int eflag, int vflag) override
+  {
+    for (int ii = 0; ii < list->inum; ++ii) computed += list->numneigh[list->ilist[ii]];
+    PairLJCut::compute(eflag, vflag);
+  }
+};
+double PairCounting::computed = 0.0;
+LAMMPS_NS::Pair *pair_counting_creator(LAMMPS_NS::LAMMPS *lmp)
+{
+  return new PairCounting(lmp);
+}
+}    // namespace
+
+TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone)
+{
+  // T = 1, h_S = 0.01, h_F = 2e-4, lobatto 5 (4 evaluations per step)
+  const double T = 1.0, hs = 0.01, hf = 2e-4;
+  const int n = 5, nsteps = 5000;
+  double count[2];
+  for (int k = 0; k < 2; ++k) {
+    Sim s;
+    (*s.lmp->force->bond_map)["class2/counting"] = &bond_counting_creator;
+    chain(s);
+    s.cmds({"bond_style class2/counting", "bond_coeff 1 1.5 2.5 0.0 0.0",
+            "bond_coeff 2 1.5 0.0 0.0 1.0",
+            k ? "fix 1 chain pe_jump/async 50 fast quadrature lobatto 5"
+              : "fix 1 chain pe_jump quadrature lobatto 5",
+            "timestep 2e-4", "thermo 0", "run 0 post no"});
+    BondCounting::computed = 0.0;
+    s.cmd(fmt::format("run {} pre no post no", nsteps));
+    count[k] = s.vec("1", 4);
+    // reported evaluations x 7 springs = spring evaluations the bond style did
+    EXPECT_NEAR(count[k] * 7.0, BondCounting::computed, 1e-6) << k;
+  }
+  // the energy output at the last step costs async one full evaluation
+  // (fix pe_jump with a Lobatto rule has the energies at the end node)
+  count[1] -= 1.0;
+  const double Ns = (n - 1) * T * (2 * M + 1) / hf;
+  const double Na = (n - 1) * T * ((M + 1) / hf + M / hs);
+  EXPECT_NEAR(count[0] * 7.0, Ns, 1e-6);
+  EXPECT_NEAR(count[1] * 7.0, Na, 1e-6);
+  EXPECT_NEAR(count[1] / count[0], 0.58, 1e-12);
+
+  // pairs: an LJ liquid with a fast slab, K = 5: only the fine subset on
+  // fine steps, the slow-slow pairs once per coarse step
+  Sim s;
+  (*s.lmp->force->pair_map)["lj/cut/counting"] = &pair_counting_creator;
+  lj_liquid(s);
+  // a cold crystal keeps its pair count, so that the count is exact
+  s.cmds({"velocity all scale 0.001", "pair_style lj/cut/counting 2.5",
+          "pair_coeff 1 1 1.0 1.0 2.5",
+          "region slab block 0 1 INF INF INF INF units lattice", "group fast region slab",
+          "fix 1 all pe_jump/async 5 fast quadrature midpoint", "timestep 0.005", "thermo 0",
+          "neigh_modify every 1 delay 0 check no", "run 0 post no"});
+  // fine fraction: pairs of the (full) list that involve a fast atom
+  auto *list = s.lmp->force->pair->list;
+  const int *mask = s.lmp->atom->mask;
+  const int fastbit = s.lmp->group->bitmask[s.lmp->group->find("fast")];
+  double all = 0.0, fine = 0.0;
+  for (int ii = 0; ii < list->inum; ++ii) {
+    const int i = list->ilist[ii];
+    for (int jj = 0; jj < list->numneigh[i]; ++jj) {
+      const int j = list->firstneigh[i][jj] & NEIGHMASK;
+      all += 1.0;
+      if ((mask[i] | mask[j]) & fastbit) fine += 1.0;
+    }
+  }
+  EXPECT_GT(fine / all, 0.2);
+  EXPECT_LT(fine / all, 0.6);
+  PairCounting::computed = 0.0;
+  s.cmd("run 100 pre no post no");
+  // the split is rebuilt with the lists every step: per step the fine
+  // pairs, every 5th step the others, plus the full energy evaluation at the
+  // last step; reported and seen by the pair style alike
+  const double reported = s.vec("1", 4);
+  const double expected = 100 * (fine / all) + 20 * (1.0 - fine / all) + 1.0;
+  EXPECT_NEAR(reported, expected, 1e-9 * expected);
+  EXPECT_NEAR(reported, PairCounting::computed / all, 1e-9 * expected);
+  EXPECT_LT(reported, 0.7 * 101);    // fix pe_jump: 101
+}
+
+/* ----------------------------------------------------------------------
+   split runs and restarts at any step, including inside a coarse step
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact)
+{
+  for (const std::string rule : {"midpoint", "lobatto 3"}) {
+    const std::string fix = "fix 1 chain pe_jump/async 20 fast quadrature " + rule;
+    std::vector<double> unbroken, split, restarted;
+    {
+      Sim s;
+      chain(s);
+      s.cmds({fix, "timestep 5e-4", "thermo 0", "run 1000 post no"});
+      unbroken = chain_q(s);
+    }
+    {
+      Sim s;
+      chain(s);
+      s.cmds({fix, "timestep 5e-4", "thermo 0", "run 333 post no", "run 667 post no"});
+      split = chain_q(s);
+    }
+    {
+      Sim s;
+      chain(s);
+      s.cmds({fix, "timestep 5e-4", "thermo 0", "run 333 post no"});
+      EXPECT_EQ(s.vec("1", 5), 0.0);    // inside a coarse step
+      s.cmds({"write_restart pe_jump_async.restart", "clear",
+              "read_restart pe_jump_async.restart", "comm_modify cutoff 4.0", fix, "thermo 0",
+              "run 667 post no"});
+      restarted = chain_q(s);
+      std::remove("pe_jump_async.restart");
+    }
+    EXPECT_LT(max_diff(unbroken, split), 1e-14) << rule;
+    EXPECT_LT(max_diff(unbroken, restarted), 1e-14) << rule;
+    EXPECT_GT(max_diff(unbroken, Q0), 1e-2);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   bad input
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, BadInputGivesClearErrors)
+{
+  const std::vector<std::string> base = {
+      "units lj",
+      "atom_style bond",
+      "region box block 0 10 0 10 0 10",
+      "create_box 2 box bond/types 1 extra/bond/per/atom 2",
+      "create_atoms 1 single 1 1 1",
+      "create_atoms 1 single 2 1 1",
+      "create_atoms 2 single 5 5 5",
+      "mass * 1.0",
+      "pair_style lj/cut 2.5",
+      "pair_coeff * * 1.0 1.0",
+      "group fast type 1",
+      "group empty type 3",
+      "group one id 1"};
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 0 fast"), ContainsRegex("K >= 1"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5"),
+              ContainsRegex("Illegal fix pe_jump/async command: missing argument"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 nosuchgroup"),
+              ContainsRegex("fast group nosuchgroup does not exist"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast adapt 1e-3 1e-4 1e-2"),
+              ContainsRegex("does not support the adapt keyword"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast sample pair"),
+              ContainsRegex("remove the sample keyword"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast quadrature lobatto 7"),
+              ContainsRegex("lobatto needs 2 to 5 points"));
+  auto with = [&](std::vector<std::string> extra) {
+    auto all = base;
+    all.insert(all.end(), extra.begin(), extra.end());
+    return all;
+  };
+  EXPECT_THAT(error_of(with({"fix 1 all pe_jump/async 5 empty"}), "run 1"),
+              ContainsRegex("the fast group has no atoms in the fix group"));
+  EXPECT_THAT(error_of(with({"fix 1 one pe_jump/async 5 fast"}), "run 1"),
+              ContainsRegex("1 atoms of the fast group are not in the fix group"));
+  EXPECT_THAT(error_of(with({"fix 1 all pe_jump/async 5 fast", "run_style respa 2 2"}), "run 1"),
+              ContainsRegex("does not support run_style respa"));
+  EXPECT_THAT(error_of(with({"bond_style hybrid harmonic", "bond_coeff 1 harmonic 1 1",
+                             "fix 1 all pe_jump/async 5 fast"}),
+                       "run 1"),
+              ContainsRegex("cannot split bond_style hybrid"));
+  const std::string sw = std::string(PEJUMP_LAMMPS_POTENTIALS) + "/Si.sw";
+  const std::vector<std::string> silicon = {"units metal",
+                                            "lattice diamond 5.431",
+                                            "region box block 0 2 0 2 0 2",
+                                            "create_box 1 box",
+                                            "create_atoms 1 box",
+                                            "mass 1 28.06",
+                                            "pair_style sw",
+                                            "pair_coeff * * " + sw + " Si",
+                                            "group fast id 1:10",
+                                            "fix 1 all pe_jump/async 5 fast"};
+  EXPECT_THAT(error_of(silicon, "run 1"),
+              ContainsRegex("cannot split the many-body pair style sw"));
+  const std::vector<std::string> charged = {
+      "units lj",
+      "atom_style charge",
+      "region box block 0 10 0 10 0 10",
+      "create_box 2 box",
+      "create_atoms 1 single 1 1 1",
+      "create_atoms 2 single 5 5 5",
+      "mass * 1.0",
+      "set type 1 charge 0.5",
+      "set type 2 charge -0.5",
+      "pair_style lj/cut/coul/long 2.5",
+      "pair_coeff * * 1.0 1.0",
+      "kspace_style ewald 1e-4",
+      "group fast type 1",
+      "fix 1 all pe_jump/async 5 fast"};
+  EXPECT_THAT(error_of(charged, "run 1"), ContainsRegex("cannot split k-space \\(ewald\\)"));
+}
