@@ -133,6 +133,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
 
   rule = new Quadrature(family, npoints);
   sampler = new ForceSampler(lmp);
+  stability_hint = adapt ? "" : ", or use the adapt keyword";
 
   time_integrate = 1;
   scalar_flag = 1;
@@ -561,31 +562,34 @@ double FixPEJump::node_cost()
 
 /* ----------------------------------------------------------------------
    before moving: the positions where forces are evaluated in this step lie
-   on the segments x + t v^{n+1/2}, t in [lo, hi] (and for atoms with
-   select[i] != 0 also t in [lo2, hi2]), so the neighbor lists stay valid
-   for all of them if the ends are within half the skin of the positions of
-   the last build; otherwise request a rebuild at this step. Also catch the
-   unbounded growth of the momentum jumps that marks a time step beyond the
-   stability limit.
+   on the segments x + t v^{n+1/2}, t in [lo, hi], so the neighbor lists stay
+   valid for all of them if the ends are within half the skin of the
+   positions of the last build; otherwise request a rebuild at this step.
+   Atoms with select[i] != 0 (the slow atoms of pe_jump/async) take steps of
+   size hsel and are also evaluated for t in [lo2, hi2] (the coarse nodes),
+   a span that a rebuild at the primary node must cover as well.
+   Also catch the unbounded growth of the momentum jumps that marks a time
+   step beyond the stability limit.
 ------------------------------------------------------------------------- */
 
-void FixPEJump::check_excursion(double lo, double hi, const int *select, double lo2, double hi2)
+void FixPEJump::check_excursion(double lo, double hi, const int *select, double lo2, double hi2,
+                                double hsel)
 {
   double **x = atom->x;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const double h = h_step;
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+  const double cp = rule->node[rule->primary()] * h_step;
 
   double local[3] = {0.0, 0.0, 0.0};    // excursion^2, step length^2, jump displacement^2
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     const bool both = select && select[i];
-    double step = 0.0, jmp = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
+    const double h = both ? hsel : h_step;
+    double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
     for (int k = 0; k < 3; k++) {
-      const double dx = h * vhalf[i][k];
-      step += dx * dx;
-      jmp += h * h * jump[i][k] * jump[i][k];
+      vv += vhalf[i][k] * vhalf[i][k];
+      jj += jump[i][k] * jump[i][k];
       if (xhold) {
         const double a = x[i][k] - xhold[i][k];
         const double ends[4] = {a + lo * vhalf[i][k], a + hi * vhalf[i][k],
@@ -593,6 +597,9 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
         for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
       }
     }
+    double span = h;
+    if (both) span = MAX(span, MAX(fabs(lo2 - cp), fabs(hi2 - cp)));
+    double step = span * span * vv, jmp = h * h * jj;
     if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = BLOWUP;
     local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
     local[1] = MAX(local[1], step);
@@ -608,13 +615,13 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
     error->all(FLERR,
                "Fix {} is unstable at step {}: the momentum jumps grow without bound (jump "
                "energy {:.8g}). The time step {} is beyond the stability limit (for a harmonic "
-               "bond dt < 2 sqrt(m/k)): reduce it, or use the adapt keyword",
-               style, update->ntimestep, cached[1], h);
+               "bond dt < 2 sqrt(m/k)): reduce it{}",
+               style, update->ntimestep, cached[1], h_step, stability_hint);
   }
   if (global[1] >= limit)
     error->all(FLERR,
-               "Fix {}: atoms move more than half the neighbor skin ({}) in one step at step {}: "
-               "reduce the time step or increase the skin",
+               "Fix {}: atoms move more than half the neighbor skin ({}) between the force "
+               "evaluations of step {}: reduce the time step (or K) or increase the skin",
                style, neighbor->skin, update->ntimestep);
   if (xhold && (global[0] > limit)) next_reneighbor = update->ntimestep;
 }

@@ -22,6 +22,8 @@ FixStyle(pe_jump,FixPEJump);
 
 #include "fix.h"
 
+#include <string>
+
 namespace LAMMPS_NS {
 namespace PEJump {
   class ForceSampler;
@@ -79,6 +81,7 @@ class FixPEJump : public Fix {
   // jump [v]^n, and (Lobatto rules) the sampled force at the start node
   double **vhalf, **jump, **fstart;
   int nstate;    // values per atom in exchange and restart buffers
+  std::string stability_hint;    // advice in the instability error
 
   // per-step work arrays (not migrated)
   double **fsum;       // quadrature sum of the forces over the step
@@ -104,7 +107,7 @@ class FixPEJump : public Fix {
   void sample_nodes(int first, int skip, double scale, double offset, const int *select,
                     double **acc, double **fend);
   void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
-                       double hi2 = 0.0);
+                       double hi2 = 0.0, double hsel = 0.0);
   void tally_at_node();
   bool tally_step() const;
   void choose_next_dt();

@@ -73,6 +73,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   if (sample_mask != ForceSampler::ALL)
     error->all(FLERR, "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
+  stability_hint = " (the fine step for the fast atoms) or K (the coarse step for the slow ones)";
   counts[0] = counts[1] = counts[2] = 0.0;
   split = new InteractionSplit(lmp, groupbit, finebit);
 
@@ -278,12 +279,13 @@ void FixPEJumpAsync::check_lists()
   const int first = rule->has_end_nodes() ? 1 : 0;
   const double c_lo = rule->node[first];
   const double c_hi = tally_step() ? 1.0 : rule->node.back();
+  const double coarse_step = nfine * h_step;
   if (fine_index + 1 < nfine) {
-    check_excursion(c_lo * h_step, c_hi * h_step);
+    check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), 0.0, 0.0, coarse_step);
   } else {
-    const double coarse_step = elapsed + h_step;
-    check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), c_lo * coarse_step - elapsed,
-                    rule->node.back() * coarse_step - elapsed);
+    const double span = elapsed + h_step;
+    check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), c_lo * span - elapsed,
+                    rule->node.back() * span - elapsed, coarse_step);
   }
 }
 

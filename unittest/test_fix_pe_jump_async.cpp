@@ -452,3 +452,43 @@ TEST(PEJumpAsync, BadInputGivesClearErrors)
       "fix 1 all pe_jump/async 5 fast"};
   EXPECT_THAT(error_of(charged, "run 1"), ContainsRegex("cannot split k-space \\(ewald\\)"));
 }
+
+/* ----------------------------------------------------------------------
+   a coarse step beyond the stability limit of the slow springs stops with
+   the instability error before non-finite numbers appear; below it, runs
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected)
+{
+  // ring of 20, E = 10 (r-1)^2: omega_max = 2 sqrt(20), CFL h < 0.2236
+  auto ring = [](Sim &s, int K) {
+    harmonic_ring(s, 20, 10.0, 1.0, 7);
+    // slow atoms move up to ~0.15 per coarse step: the skin must cover it
+    s.cmds({"neighbor 1.0 bin", "group fast id 1:10",
+            fmt::format("fix 1 all pe_jump/async {} fast", K),
+            "timestep 0.01", "thermo 100",
+            "thermo_style custom step pe f_1[1] f_1[2]"});
+  };
+  {
+    Sim s;
+    ring(s, 15);    // h_S = 0.15
+    s.cmd("run 20000 post no");
+    EXPECT_TRUE(std::isfinite(s.vec("1", 1)));
+    EXPECT_LT(s.vec("1", 1), 1.0);    // jump energy stays small
+  }
+  {
+    Sim s(MPI_COMM_WORLD, false);
+    ring(s, 30);    // h_S = 0.3
+    ::testing::internal::CaptureStdout();
+    std::string what;
+    try {
+      s.cmd("run 20000 post no");
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      what = e.what();
+    }
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    EXPECT_THAT(what, ContainsRegex("is unstable at step [0-9]+"));
+    EXPECT_THAT(what, ContainsRegex("or K \\(the coarse step"));
+    EXPECT_THAT(out, ::testing::Not(ContainsRegex("[^a-z](nan|inf)[^a-z]")));
+  }
+}
