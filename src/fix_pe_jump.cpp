@@ -50,6 +50,8 @@ using PEJump::Quadrature;
 static constexpr double ADAPT_GROWTH = 1.05;    // largest step growth factor per step
 static constexpr double ADAPT_SAFETY = 0.5;     // aim at this fraction of the bound
 static constexpr double BLOWUP = 1.0e300;       // stands for a non-finite value in reductions
+static constexpr int ADAPT_SAMPLES = 64;        // trial steps between dtmax and dtmin
+static constexpr int ADAPT_BISECT = 40;         // bisections of the largest admissible step
 
 /* ---------------------------------------------------------------------- */
 
@@ -59,7 +61,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
-    fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr)
+    fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr),
+    fprev(nullptr), hprev(0.0)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
@@ -149,7 +152,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
   force_reneighbor = 1;
   next_reneighbor = -1;
 
-  nstate = rule->has_end_nodes() ? 9 : 6;
+  nstate = (rule->has_end_nodes() ? 9 : 6) + (adapt ? 3 : 0);
   nmax_work = 0;
   started = reinit_pending = 0;
   split_primary = use_copy = 0;
@@ -175,6 +178,7 @@ FixPEJump::~FixPEJump()
   memory->destroy(vhalf);
   memory->destroy(jump);
   memory->destroy(fstart);
+  memory->destroy(fprev);
   memory->destroy(fsum);
   memory->destroy(fsample);
   memory->destroy(xsave);
@@ -422,6 +426,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 
   reinit_pending = with_start && (init_style == INIT_KICK) && (modify->n_post_force_any > 0);
   started = 1;
+  hprev = 0.0;
   cached_step = -1;
 }
 
@@ -628,12 +633,14 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
 
 /* ----------------------------------------------------------------------
    forward rule for the adaptive step: the next jump is predicted as
-   [v]^{n+2} ~ 2 h' a - [v]^{n+1} with a the quadrature-averaged force of
-   this step; take the largest h' (growing by at most ADAPT_GROWTH per step)
-   with (1/8) sum m |[v]^{n+2}|^2 <= ADAPT_SAFETY * eps * E, where
-   E = max(|pseudo-energy at the start of the run|, kinetic energy). The
-   safety factor absorbs most of the prediction error, not all: where the
-   step changes fast the jump can still exceed eps * E (measured: 2.2x)
+   [v]^{n+2} ~ 2 h' a' - [v]^{n+1}, a' the quadrature-averaged force of the
+   next step extrapolated linearly from this step's and the previous one's
+   (a' = a + (h' + h)/(h + h_prev) (a - a_prev), mid-step times), so the
+   predicted jump is h' P + h'^2 Q - [v]^{n+1}. Take the largest h' (growing
+   by at most ADAPT_GROWTH per step) with (1/8) sum m |[v]^{n+2}|^2 <=
+   ADAPT_SAFETY * eps * E, E = max(|pseudo-energy at the start of the
+   run|, kinetic energy); if no h' meets it, the h' of the smallest jump.
+   Without a previous step (first step of a run) a' = a.
 ------------------------------------------------------------------------- */
 
 void FixPEJump::choose_next_dt()
@@ -644,35 +651,73 @@ void FixPEJump::choose_next_dt()
   const int *type = atom->type;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
+  const double h = update->dt;
+  const bool extrapolate = (hprev > 0.0);
+  const double c1 = extrapolate ? h / (h + hprev) : 0.0;
+  const double c2 = extrapolate ? 1.0 / (h + hprev) : 0.0;
 
-  double local[4] = {0.0, 0.0, 0.0, 0.0};    // sum m a.a, m a.j, m j.j, m v.v
+  // sum m of: P.P, P.Q, Q.Q, P.J, Q.J, J.J, v.v
+  double local[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     const double m = rmass ? rmass[i] : mass[type[i]];
     for (int k = 0; k < 3; k++) {
       const double a = force->ftm2v * fsum[i][k] / m;
-      local[0] += m * a * a;
-      local[1] += m * a * jump[i][k];
-      local[2] += m * jump[i][k] * jump[i][k];
-      local[3] += m * v[i][k] * v[i][k];
+      const double da = extrapolate ? a - force->ftm2v * fprev[i][k] / m : 0.0;
+      const double P = 2.0 * (a + c1 * da), Q = 2.0 * c2 * da, J = jump[i][k];
+      local[0] += m * P * P;
+      local[1] += m * P * Q;
+      local[2] += m * Q * Q;
+      local[3] += m * P * J;
+      local[4] += m * Q * J;
+      local[5] += m * J * J;
+      local[6] += m * v[i][k] * v[i][k];
+      fprev[i][k] = fsum[i][k];
     }
   }
-  double sum[4];
-  MPI_Allreduce(local, sum, 4, MPI_DOUBLE, MPI_SUM, world);
+  hprev = h;
+  double sum[7];
+  MPI_Allreduce(local, sum, 7, MPI_DOUBLE, MPI_SUM, world);
 
   const double mvv2e = force->mvv2e;
-  const double scale = MAX(energy_scale, 0.5 * mvv2e * sum[3]);
-  const double A = mvv2e * sum[0], B = mvv2e * sum[1], C = mvv2e * sum[2];
-  const double hcap = MIN(adapt_dtmax, ADAPT_GROWTH * update->dt);
+  const double scale = MAX(energy_scale, 0.5 * mvv2e * sum[6]);
+  const double target = 8.0 * ADAPT_SAFETY * adapt_eps * scale / mvv2e;
+  const auto jump8 = [&sum](double t) {    // 8/mvv2e times the predicted jump energy
+    return t * t * sum[0] + 2.0 * t * t * t * sum[1] + t * t * t * t * sum[2] -
+        2.0 * t * sum[3] - 2.0 * t * t * sum[4] + sum[5];
+  };
+  const double hcap = MIN(adapt_dtmax, ADAPT_GROWTH * h);
+  const double hlow = MIN(adapt_dtmin, hcap);
 
-  // (1/8)(4 h^2 A - 4 h B + C) <= eps E  <=>  h^2 A - h B + C/4 - 2 eps E <= 0
+  // largest step meeting the bound: scan down from hcap, then bisect
   double hnew = hcap;
-  if (A > 0.0) {
-    const double disc = B * B - 4.0 * A * (0.25 * C - 2.0 * ADAPT_SAFETY * adapt_eps * scale);
-    if (disc >= 0.0)
-      hnew = MIN(hcap, (B + sqrt(disc)) / (2.0 * A));
-    else
-      hnew = MIN(hcap, B / (2.0 * A));    // no step meets the bound: the smallest jump
+  if (jump8(hcap) > target) {
+    const double ratio = pow(hlow / hcap, 1.0 / ADAPT_SAMPLES);
+    double above = hcap, best = hcap, best_value = jump8(hcap);
+    hnew = -1.0;
+    for (int n = 1; (n <= ADAPT_SAMPLES) && (hnew < 0.0); n++) {
+      const double t = hcap * pow(ratio, n);
+      const double value = jump8(t);
+      if (value <= target) {
+        // the bound holds at t but not at above: bisect in between
+        double good = t;
+        for (int iter = 0; iter < ADAPT_BISECT; iter++) {
+          const double mid = 0.5 * (good + above);
+          if (jump8(mid) <= target)
+            good = mid;
+          else
+            above = mid;
+        }
+        hnew = good;
+      } else {
+        if (value < best_value) {
+          best = t;
+          best_value = value;
+        }
+        above = t;
+      }
+    }
+    if (hnew < 0.0) hnew = best;    // no step meets the bound: the smallest jump
   }
   hnew = MAX(hnew, adapt_dtmin);
   if (hnew == update->dt) return;
@@ -831,6 +876,7 @@ void FixPEJump::grow_arrays(int nmax)
   memory->grow(vhalf, nmax, 3, "pe_jump:vhalf");
   memory->grow(jump, nmax, 3, "pe_jump:jump");
   if (rule->has_end_nodes()) memory->grow(fstart, nmax, 3, "pe_jump:fstart");
+  if (adapt) memory->grow(fprev, nmax, 3, "pe_jump:fprev");
 }
 
 /* ---------------------------------------------------------------------- */
@@ -841,6 +887,7 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
     vhalf[j][k] = vhalf[i][k];
     jump[j][k] = jump[i][k];
     if (fstart) fstart[j][k] = fstart[i][k];
+    if (fprev) fprev[j][k] = fprev[i][k];
   }
 }
 
@@ -853,6 +900,8 @@ int FixPEJump::pack_exchange(int i, double *buf)
   for (int k = 0; k < 3; k++) buf[m++] = jump[i][k];
   if (fstart)
     for (int k = 0; k < 3; k++) buf[m++] = fstart[i][k];
+  if (fprev)
+    for (int k = 0; k < 3; k++) buf[m++] = fprev[i][k];
   return m;
 }
 
@@ -865,6 +914,8 @@ int FixPEJump::unpack_exchange(int nlocal, double *buf)
   for (int k = 0; k < 3; k++) jump[nlocal][k] = buf[m++];
   if (fstart)
     for (int k = 0; k < 3; k++) fstart[nlocal][k] = buf[m++];
+  if (fprev)
+    for (int k = 0; k < 3; k++) fprev[nlocal][k] = buf[m++];
   return m;
 }
 
@@ -891,6 +942,7 @@ void FixPEJump::global_state(double *list) const
   list[1] = rule->family();
   list[2] = rule->size();
   list[3] = evals_total;
+  list[4] = hprev;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -902,6 +954,7 @@ void FixPEJump::restart(char *buf)
       (static_cast<int>(list[1]) == rule->family()) && (static_cast<int>(list[2]) == rule->size());
   started = (static_cast<int>(list[0]) != 0) && same_rule;
   evals_total = list[3];
+  hprev = list[4];
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "
@@ -979,7 +1032,7 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
 
 double FixPEJump::memory_usage()
 {
-  double bytes = (double) atom->nmax * 3 * sizeof(double) * (nstate / 3);
+  double bytes = (double) atom->nmax * 3 * sizeof(double) * (2 + (fstart ? 1 : 0) + (fprev ? 1 : 0));
   bytes += (double) nmax_work * 3 * sizeof(double) * 4;
   return bytes;
 }

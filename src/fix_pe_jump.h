@@ -76,6 +76,8 @@ class FixPEJump : public Fix {
   int adapt;
   double adapt_eps, adapt_dtmin, adapt_dtmax;
   double energy_scale;    // |pseudo-energy| at the start of the run
+  double **fprev;         // per atom: quadrature-averaged force of the previous step
+  double hprev;           // previous step size, 0 if there is none
 
   // per-atom state, velocity units: free-flight velocity v^{n+1/2},
   // jump [v]^n, and (Lobatto rules) the sampled force at the start node
@@ -127,7 +129,7 @@ class FixPEJump : public Fix {
   virtual void store_start_node();        // Lobatto start-node forces at q^0
   virtual double node_cost();             // evaluations a sampled node costs
   virtual void check_lists();             // neighbor lists valid for this step's nodes
-  static constexpr int NGLOBAL = 4;       // values of the global restart state
+  static constexpr int NGLOBAL = 5;       // values of the global restart state
 };
 
 }    // namespace LAMMPS_NS
