@@ -24,6 +24,7 @@
 #include "atom.h"
 #include "bond.h"
 #include "comm.h"
+#include "compute.h"
 #include "dihedral.h"
 #include "domain.h"
 #include "error.h"
@@ -62,7 +63,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
     fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr),
-    fprev(nullptr), hprev(0.0)
+    fprev(nullptr), hprev(0.0), fnode(nullptr)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
@@ -72,6 +73,11 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
   sample_mask = ForceSampler::ALL;
   adapt = 0;
   adapt_eps = adapt_dtmin = adapt_dtmax = 0.0;
+  auto_tol = 0.0;
+  auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
+  id_pe = nullptr;
+  c_pe = nullptr;
+  vprev = 0.0;
 
   const std::string fix = std::string("fix ") + style;
   int iarg = first_keyword;
@@ -83,6 +89,13 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
         family = Quadrature::LEGENDRE;
         npoints = 1;
         iarg += 2;
+      } else if (which == "auto") {
+        if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature auto", error);
+        auto_tol = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
+        if (auto_tol <= 0.0) error->all(FLERR, "Fix {} quadrature auto needs TOL > 0", style);
+        family = Quadrature::LOBATTO;
+        npoints = 5;
+        iarg += 3;
       } else if ((which == "lobatto") || (which == "legendre")) {
         if (iarg + 3 > narg)
           utils::missing_cmd_args(FLERR, fix + " quadrature " + which, error);
@@ -138,6 +151,15 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
   sampler = new ForceSampler(lmp);
   stability_hint = adapt ? "" : ", or use the adapt keyword";
 
+  // quadrature auto needs the potential energy at every step: a compute pe
+  // asks the Verlet loop to tally it
+  if (auto_tol > 0.0) {
+    if (sample_mask != ForceSampler::ALL)
+      error->all(FLERR, "Fix {} quadrature auto samples all force contributions", style);
+    id_pe = utils::strdup(std::string(id) + "_pe");
+    modify->add_compute(fmt::format("{} all pe", id_pe));
+  }
+
   time_integrate = 1;
   scalar_flag = 1;
   vector_flag = 1;
@@ -183,6 +205,9 @@ FixPEJump::~FixPEJump()
   memory->destroy(fsample);
   memory->destroy(xsave);
   memory->destroy(fsave);
+  memory->destroy(fnode);
+  if (id_pe && modify->get_compute_by_id(id_pe)) modify->delete_compute(id_pe);
+  delete[] id_pe;
   delete[] extlist;
   delete rule;
   delete sampler;
@@ -216,6 +241,10 @@ void FixPEJump::init()
   const int p = rule->primary();
   split_primary = remainder && ((rule->weight[p] != 1.0) || rule->has_end_nodes());
   use_copy = split_primary && ((sample_mask & present) == present);
+  if (id_pe) {
+    c_pe = modify->get_compute_by_id(id_pe);
+    if (!c_pe) error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
+  }
   if (present && !(sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
@@ -242,6 +271,10 @@ void FixPEJump::setup(int /*vflag*/)
                      style);
   }
   if (adapt) energy_scale = fabs(pseudo_energy_now());
+  if (auto_tol > 0.0) {
+    vprev = potential_now(sample_mask);
+    c_pe->addstep(update->ntimestep + 1);
+  }
 }
 
 /* ---------------------------------------------------------------------- */
@@ -377,6 +410,20 @@ void FixPEJump::tally_at_node()
   }
 }
 
+/* ----------------------------------------------------------------------
+   quadrature auto: say how often each rule was taken in this run
+------------------------------------------------------------------------- */
+
+void FixPEJump::post_run()
+{
+  if ((auto_tol > 0.0) && (comm->me == 0))
+    utils::logmesg(lmp,
+                   "Fix {} quadrature auto {}: steps with lobatto 2: {}, lobatto 3: {}, "
+                   "lobatto 5: {}\n",
+                   style, auto_tol, auto_steps[0], auto_steps[1], auto_steps[2]);
+  auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
+}
+
 /* ---------------------------------------------------------------------- */
 
 void FixPEJump::end_of_step()
@@ -484,11 +531,14 @@ void FixPEJump::primary_sampled_force()
 
 void FixPEJump::quadrature_sum()
 {
-  double **x = atom->x;
+  if (auto_tol > 0.0) {
+    auto_quadrature_sum();
+    return;
+  }
+
   double **f = atom->f;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const int nall = nlocal + atom->nghost;
   const int p = rule->primary();
   const double wp = rule->weight[p];
   const int reuse_start = rule->has_end_nodes();
@@ -509,6 +559,109 @@ void FixPEJump::quadrature_sum()
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
   sample_nodes(first, p, h_step, -rule->node[p] * h_step, nullptr, fsum, nullptr);
+}
+
+/* ----------------------------------------------------------------------
+   quadrature auto: the nested Gauss-Lobatto rules with 2 (nodes 0, 1),
+   3 (also 1/2) and 5 points (also (1 -+ sqrt(3/7))/2). The start node is
+   the previous end node, the end node the Verlet evaluation, which also
+   tallies the potential energy V(q^{n+1}) (the fix requests it every step).
+   The pseudo-energy defect of this step with rule r is then known before
+   the jump: D_r = V(q^{n+1}) - V(q^n) + h sum_i v_i^{n+1/2} . I_r,i with
+   I_r the quadrature average of the forces. The step takes the first rule
+   of 2, 3, 5 points with |D_r| <= TOL (1, 2 or 4 evaluations), else the
+   5-point rule.
+------------------------------------------------------------------------- */
+
+void FixPEJump::auto_quadrature_sum()
+{
+  double **x = atom->x;
+  double **f = atom->f;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const int nall = nlocal + atom->nghost;
+  const double h = h_step;
+  const std::vector<double> &c = rule->node;    // lobatto 5: 0, c1, 1/2, c3, 1
+  const std::vector<double> &w = rule->weight;
+
+  primary_sampled_force();    // F(1) into fsample
+  const double vnew = (update->eflag_global == update->ntimestep)
+      ? sampler->energy(sample_mask)
+      : potential_now(sample_mask);
+  const double dv = vnew - vprev;
+  vprev = vnew;
+  c_pe->addstep(update->ntimestep + 1);
+
+  // defect of the rule whose quadrature average is in fsum
+  const auto defect = [&]() {
+    double local = 0.0, global = 0.0;
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit)
+        local += vhalf[i][0] * fsum[i][0] + vhalf[i][1] * fsum[i][1] + vhalf[i][2] * fsum[i][2];
+    MPI_Allreduce(&local, &global, 1, MPI_DOUBLE, MPI_SUM, world);
+    return fabs(dv + h * global);
+  };
+
+  for (int i = 0; i < nlocal; i++)
+    if (mask[i] & groupbit)
+      for (int k = 0; k < 3; k++) fsum[i][k] = 0.5 * (fstart[i][k] + fsample[i][k]);
+  int used = 0;
+  if (defect() > auto_tol) {
+    if (nall) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nall);
+    if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
+
+    evaluate_at((c[2] - 1.0) * h, nullptr);
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit)
+        for (int k = 0; k < 3; k++) {
+          fnode[i][k] = f[i][k];
+          fsum[i][k] = (fstart[i][k] + 4.0 * f[i][k] + fsample[i][k]) / 6.0;
+        }
+    used = 1;
+    if (defect() > auto_tol) {
+      for (int i = 0; i < nlocal; i++)
+        if (mask[i] & groupbit)
+          for (int k = 0; k < 3; k++)
+            fsum[i][k] = w[0] * fstart[i][k] + w[2] * fnode[i][k] + w[4] * fsample[i][k];
+      for (int node : {1, 3}) {
+        evaluate_at((c[node] - 1.0) * h, nullptr);
+        for (int i = 0; i < nlocal; i++)
+          if (mask[i] & groupbit)
+            for (int k = 0; k < 3; k++) fsum[i][k] += w[node] * f[i][k];
+      }
+      used = 2;
+    }
+    if (nall) memcpy(&x[0][0], &xsave[0][0], 3 * sizeof(double) * nall);
+    if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+  }
+  ++auto_steps[used];
+
+  // forces that are not sampled at the nodes act with weight 1
+  if (split_primary)
+    for (int i = 0; i < nlocal; i++) {
+      if (!(mask[i] & groupbit)) continue;
+      for (int k = 0; k < 3; k++) fsum[i][k] += f[i][k] - fsample[i][k];
+    }
+}
+
+/* ----------------------------------------------------------------------
+   move the owned atoms of the group (with select[i] != 0 if select is
+   given) to xsave + shift v^{n+1/2} and evaluate the sampled forces there
+------------------------------------------------------------------------- */
+
+void FixPEJump::evaluate_at(double shift, const int *select)
+{
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit) || (select && !select[i])) continue;
+    x[i][0] = xsave[i][0] + shift * vhalf[i][0];
+    x[i][1] = xsave[i][1] + shift * vhalf[i][1];
+    x[i][2] = xsave[i][2] + shift * vhalf[i][2];
+  }
+  sampler->compute(sample_mask, 0, 0);
+  evals_step += node_cost();
 }
 
 /* ----------------------------------------------------------------------
@@ -534,15 +687,7 @@ void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, c
 
   for (int node = first; node <= last; node++) {
     if (node == skip) continue;
-    const double shift = scale * rule->node[node] + offset;
-    for (int i = 0; i < nlocal; i++) {
-      if (!(mask[i] & groupbit) || (select && !select[i])) continue;
-      x[i][0] = xsave[i][0] + shift * vhalf[i][0];
-      x[i][1] = xsave[i][1] + shift * vhalf[i][1];
-      x[i][2] = xsave[i][2] + shift * vhalf[i][2];
-    }
-    sampler->compute(sample_mask, 0, 0);
-    evals_step += node_cost();
+    evaluate_at(scale * rule->node[node] + offset, select);
     const double w = rule->weight[node];
     for (int i = 0; i < nlocal; i++) {
       if (!(mask[i] & groupbit) || (select && !select[i])) continue;
@@ -774,27 +919,28 @@ int FixPEJump::detect_velocity_change()
 
 double FixPEJump::pseudo_energy_now()
 {
-  const int nlocal = atom->nlocal;
-  if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
-  sampler->compute(ForceSampler::ALL, ENERGY_GLOBAL, 0);
-  if (nlocal) memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
-
-  double one = 0.0;
-  const int have = sampler->present();
-  if (have & ForceSampler::PAIR) one += force->pair->eng_vdwl + force->pair->eng_coul;
-  if (have & ForceSampler::BOND) one += force->bond->energy;
-  if (have & ForceSampler::ANGLE) one += force->angle->energy;
-  if (have & ForceSampler::DIHEDRAL) one += force->dihedral->energy;
-  if (have & ForceSampler::IMPROPER) one += force->improper->energy;
-  double pe = 0.0;
-  MPI_Allreduce(&one, &pe, 1, MPI_DOUBLE, MPI_SUM, world);
-  if (have & ForceSampler::KSPACE) pe += force->kspace->energy;
+  double pe = potential_now(ForceSampler::ALL);
   if (force->pair && force->pair->tail_flag) {
     const double volume = domain->xprd * domain->yprd * domain->zprd;
     pe += force->pair->etail / volume;
   }
   energies();
   return pe + cached[0];
+}
+
+/* ----------------------------------------------------------------------
+   potential energy of the contributions in mask at the current positions
+   (one evaluation; the forces are left as they were)
+------------------------------------------------------------------------- */
+
+double FixPEJump::potential_now(int mask)
+{
+  grow_work();
+  const int nlocal = atom->nlocal;
+  if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
+  sampler->compute(mask, ENERGY_GLOBAL, 0);
+  if (nlocal) memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+  return sampler->energy(mask);
 }
 
 /* ----------------------------------------------------------------------
@@ -867,6 +1013,10 @@ void FixPEJump::grow_work()
   memory->create(fsample, nmax_work, 3, "pe_jump:fsample");
   memory->create(xsave, nmax_work, 3, "pe_jump:xsave");
   memory->create(fsave, nmax_work, 3, "pe_jump:fsave");
+  if (auto_tol > 0.0) {
+    memory->destroy(fnode);
+    memory->create(fnode, nmax_work, 3, "pe_jump:fnode");
+  }
 }
 
 /* ---------------------------------------------------------------------- */

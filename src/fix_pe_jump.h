@@ -43,6 +43,7 @@ class FixPEJump : public Fix {
   void pre_reverse(int, int) override;
   void final_integrate() override;
   void end_of_step() override;
+  void post_run() override;
 
   double compute_scalar() override;
   double compute_vector(int) override;
@@ -71,6 +72,14 @@ class FixPEJump : public Fix {
   PEJump::ForceSampler *sampler;
   int init_style;
   int sample_mask;    // contributions sampled at the quadrature nodes
+
+  // quadrature auto: defect tolerance (energy), steps done with lobatto 3 and 5
+  double auto_tol;
+  bigint auto_steps[3];
+  double **fnode;          // work: forces at the middle node
+  char *id_pe;             // compute pe that requests the energy at every step
+  class Compute *c_pe;
+  double vprev;            // potential energy at the start of the step
 
   // adaptive time step: (1/8)|M^-1/2 [p]|^2 <= eps * energy scale
   int adapt;
@@ -106,6 +115,8 @@ class FixPEJump : public Fix {
   virtual void start_scheme(const char *, bool);
   void primary_sampled_force();
   void quadrature_sum();
+  void auto_quadrature_sum();
+  void evaluate_at(double shift, const int *select);
   void sample_nodes(int first, int skip, double scale, double offset, const int *select,
                     double **acc, double **fend);
   void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
@@ -117,6 +128,7 @@ class FixPEJump : public Fix {
   void grow_work();
   int detect_velocity_change();
   double pseudo_energy_now();
+  double potential_now(int mask);
   void global_state(double *) const;
 
   // two-step update of owned atom i with the quadrature sum favg of the

@@ -70,6 +70,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     error->all(FLERR,
                "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
                "steps are fixed (use fix pe_jump for adaptive steps)");
+  if (auto_tol > 0.0)
+    error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
   if (sample_mask != ForceSampler::ALL)
     error->all(FLERR, "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 

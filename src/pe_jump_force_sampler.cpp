@@ -90,6 +90,23 @@ void ForceSampler::compute(int mask, int eflag, int vflag)
 
 /* ---------------------------------------------------------------------- */
 
+double ForceSampler::energy(int mask) const
+{
+  mask &= present();
+  double one = 0.0;
+  if (mask & PAIR) one += force->pair->eng_vdwl + force->pair->eng_coul;
+  if (mask & BOND) one += force->bond->energy;
+  if (mask & ANGLE) one += force->angle->energy;
+  if (mask & DIHEDRAL) one += force->dihedral->energy;
+  if (mask & IMPROPER) one += force->improper->energy;
+  double all = 0.0;
+  MPI_Allreduce(&one, &all, 1, MPI_DOUBLE, MPI_SUM, world);
+  if (mask & KSPACE) all += force->kspace->energy;    // already summed over ranks
+  return all;
+}
+
+/* ---------------------------------------------------------------------- */
+
 double ForceSampler::fraction(int mask)
 {
   const int have = present();

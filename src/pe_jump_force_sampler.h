@@ -45,6 +45,10 @@ namespace PEJump {
     // in mask with the given energy/virial flags, reverse-communicate forces
     void compute(int mask, int eflag, int vflag);
 
+    // potential energy of the contributions in mask as tallied by their last
+    // computation with energy flags (collective call)
+    double energy(int mask) const;
+
     // fraction of the system's interactions (neighbor pairs, bonds, angles,
     // dihedrals, impropers) that the contributions in mask represent;
     // collective call, recounts only after a neighbor list rebuild

@@ -655,6 +655,10 @@ TEST(PEJump, BadInputGivesClearErrors)
            Case{"fix 1 all pe_jump adapt 1e-3 0.01 0.001", "0 < dtmin <= dtmax"},
            Case{"fix 1 all pe_jump sample", "sample needs one or more of pair"},
            Case{"fix 1 all pe_jump sample springs", "sample needs one or more of pair"},
+           Case{"fix 1 all pe_jump quadrature auto", "Illegal fix pe_jump quadrature auto command"},
+           Case{"fix 1 all pe_jump quadrature auto 0", "quadrature auto needs TOL > 0"},
+           Case{"fix 1 all pe_jump quadrature auto 1e-6 sample pair",
+                "quadrature auto samples all force contributions"},
        }) {
     EXPECT_THAT(error_of(setup, c.command), ContainsRegex(c.regex)) << c.command;
   }
@@ -668,4 +672,71 @@ TEST(PEJump, BadInputGivesClearErrors)
                                            "pair_style zero 2.0", "pair_coeff * *",
                                            "fix 1 all pe_jump"};
   EXPECT_THAT(error_of(sphere, "run 1"), ContainsRegex("integrates point particles only"));
+}
+
+/* ----------------------------------------------------------------------
+   quadrature auto: per step the 3-point Lobatto rule where the embedded
+   estimate of the 2-point rule's pseudo-energy defect is below TOL, else
+   the 5-point rule; on a ring of Morse bonds (non-polynomial forces)
+------------------------------------------------------------------------- */
+
+namespace {
+struct AutoRun {
+  double worst_step;    // largest |change of H~| in one step
+  double evals;         // force evaluations over the run
+};
+
+AutoRun morse_ring(const std::string &rule, int nsteps)
+{
+  Sim s;
+  harmonic_ring(s, 16, 1.0, 1.5, 11);
+  s.cmds({"bond_style morse", "bond_coeff 1 1.0 2.0 1.0", "fix 1 all pe_jump quadrature " + rule,
+          "timestep 0.05", "thermo 0", "run 0 post no"});
+  AutoRun r{0.0, 0.0};
+  double h = pseudo_energy(s);
+  for (int n = 0; n < nsteps; ++n) {
+    s.cmd("run 1 pre no post no");
+    const double hn = pseudo_energy(s);
+    r.worst_step = std::max(r.worst_step, std::fabs(hn - h));
+    h = hn;
+  }
+  r.evals = s.vec("1", 4);
+  return r;
+}
+}    // namespace
+
+TEST(PEJump, QuadratureAutoKeepsTheStepDefectBelowTol)
+{
+  const int n = 400;
+  const auto l2 = morse_ring("lobatto 2", n);
+  const auto l3 = morse_ring("lobatto 3", n);
+  const auto l5 = morse_ring("lobatto 5", n);
+  std::cout << "Morse ring: largest step defect lobatto 2 " << l2.worst_step << ", lobatto 3 "
+            << l3.worst_step << ", lobatto 5 " << l5.worst_step << "\n";
+  EXPECT_DOUBLE_EQ(l2.evals, 1.0 * n);
+  EXPECT_DOUBLE_EQ(l3.evals, 2.0 * n);
+  EXPECT_DOUBLE_EQ(l5.evals, 4.0 * n);
+  ASSERT_GT(l2.worst_step, 100.0 * l3.worst_step);    // the rules differ visibly
+  ASSERT_GT(l3.worst_step, 100.0 * l5.worst_step);
+
+  // tolerances between the rules: every step keeps its defect below the
+  // tolerance, at fewer evaluations than the fixed rule that would be needed
+  struct Band {
+    double tol, fewer, more;    // tolerance, evaluations per step of the rules around it
+  };
+  for (const Band b : {Band{0.3 * l2.worst_step, 1.0, 2.0}, Band{0.3 * l3.worst_step, 2.0, 4.0}}) {
+    const auto mixed = morse_ring(fmt::format("auto {:.6g}", b.tol), n);
+    std::cout << "auto " << b.tol << ": largest step defect " << mixed.worst_step << ", "
+              << mixed.evals / n << " evaluations per step\n";
+    EXPECT_LT(mixed.worst_step, b.tol);
+    EXPECT_GT(mixed.evals, b.fewer * n);
+    EXPECT_LT(mixed.evals, b.more * n);
+  }
+  // a loose tolerance takes the 2-point rule, an impossible one the 5-point rule
+  const auto loose = morse_ring("auto 1e10", n);
+  EXPECT_DOUBLE_EQ(loose.evals, 1.0 * n);
+  EXPECT_NEAR(loose.worst_step, l2.worst_step, 1e-12);
+  const auto tight = morse_ring("auto 1e-300", n);
+  EXPECT_DOUBLE_EQ(tight.evals, 4.0 * n);
+  EXPECT_NEAR(tight.worst_step, l5.worst_step, 1e-12);
 }
