@@ -226,6 +226,11 @@ int FixPEJump::setmask()
 
 void FixPEJump::init()
 {
+  inverse_mass.assign(atom->ntypes + 1, 0.0);
+  if (atom->mass)
+    for (int t = 1; t <= atom->ntypes; t++)
+      if (atom->mass[t] > 0.0) inverse_mass[t] = 1.0 / atom->mass[t];
+
   if (utils::strmatch(update->integrate_style, "^respa"))
     error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
   if (atom->torque_flag)
@@ -381,8 +386,8 @@ void FixPEJump::final_integrate()
 
 void FixPEJump::jump_atom(int i, double h, const double *favg)
 {
-  const double m = atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
-  const double dtfm = 2.0 * h * force->ftm2v / m;
+  const double dtfm = 2.0 * h * force->ftm2v *
+      (atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]]);
   for (int k = 0; k < 3; k++) {
     const double newjump = dtfm * favg[k] - jump[i][k];
     vhalf[i][k] += newjump;
@@ -728,8 +733,11 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
   double **x = atom->x;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   const double cp = rule->node[rule->primary()] * h_step;
+  // if forces are evaluated at the primary node only, the neighbor list
+  // check of the Verlet loop itself covers them
+  const bool primary_only = !select && (lo == cp) && (hi == cp);
+  double **xhold = (neighbor->dist_check && !primary_only) ? neighbor->get_xhold() : nullptr;
 
   double local[3] = {0.0, 0.0, 0.0};    // excursion^2, step length^2, jump displacement^2
   for (int i = 0; i < nlocal; i++) {

@@ -23,6 +23,7 @@ FixStyle(pe_jump,FixPEJump);
 #include "fix.h"
 
 #include <string>
+#include <vector>
 
 namespace LAMMPS_NS {
 namespace PEJump {
@@ -93,6 +94,7 @@ class FixPEJump : public Fix {
   double **vhalf, **jump, **fstart;
   int nstate;    // values per atom in exchange and restart buffers
   std::string stability_hint;    // advice in the instability error
+  std::vector<double> inverse_mass;    // per atom type
 
   // per-step work arrays (not migrated)
   double **fsum;       // quadrature sum of the forces over the step
