@@ -37,6 +37,7 @@
 #include "group.h"
 #include "improper.h"
 #include "memory.h"
+#include "neighbor.h"
 #include "pair.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_interaction_split.h"
@@ -56,7 +57,7 @@ static constexpr int NASYNC_GLOBAL = 3;    // K, fine step index, elapsed time
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
-    reverse_labels(0), split(nullptr), facc(nullptr), fstart_coarse(nullptr), klass(nullptr),
+    reverse_labels(0), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr), klass(nullptr),
     fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
@@ -174,12 +175,16 @@ void FixPEJumpAsync::setup_post_neighbor()
 void FixPEJumpAsync::post_neighbor()
 {
   split->build();
+  split_calls = neighbor->ncalls;
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::setup(int vflag)
 {
+  // a run with "pre no" keeps the lists of the previous run: split them if
+  // this fix has not seen them yet
+  if (split_calls != neighbor->ncalls) post_neighbor();
   FixPEJump::setup(vflag);
   label_classes();
 }

@@ -64,6 +64,7 @@ class FixPEJumpAsync : public FixPEJump {
   double elapsed;       // time elapsed in the current coarse step
   double counts[3];     // global number of slow, mixed, fast atoms
   int reverse_labels;   // reverse communication carries interface flags
+  bigint split_calls;   // neighbor->ncalls when the interactions were split
 
   PEJump::InteractionSplit *split;
 
