@@ -42,6 +42,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 using namespace LAMMPS_NS;
 using namespace FixConst;
@@ -56,14 +57,15 @@ static constexpr int ADAPT_BISECT = 40;         // bisections of the largest adm
 
 /* ---------------------------------------------------------------------- */
 
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3) {}
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3, 1) {}
 
 /* ---------------------------------------------------------------------- */
 
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword,
+                     int compensate_default) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
     fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr),
-    fprev(nullptr), hprev(0.0), fnode(nullptr)
+    fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), fnode(nullptr)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
@@ -73,6 +75,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
   sample_mask = ForceSampler::ALL;
   adapt = 0;
   adapt_eps = adapt_dtmin = adapt_dtmax = 0.0;
+  compensate = compensate_default;
   auto_tol = 0.0;
   auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
   id_pe = nullptr;
@@ -128,6 +131,10 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
       if ((adapt_dtmin <= 0.0) || (adapt_dtmax < adapt_dtmin))
         error->all(FLERR, "Fix {} adapt needs 0 < dtmin <= dtmax", style);
       iarg += 4;
+    } else if (strcmp(arg[iarg], "compensate") == 0) {
+      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " compensate", error);
+      compensate = utils::logical(FLERR, arg[iarg + 1], false, lmp);
+      iarg += 2;
     } else if (strcmp(arg[iarg], "sample") == 0) {
       sample_mask = 0;
       ++iarg;
@@ -174,7 +181,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword) :
   force_reneighbor = 1;
   next_reneighbor = -1;
 
-  nstate = (rule->has_end_nodes() ? 9 : 6) + (adapt ? 3 : 0);
+  nstate = (rule->has_end_nodes() ? 9 : 6) + ((adapt || compensate) ? 6 : 0);
   nmax_work = 0;
   started = reinit_pending = 0;
   split_primary = use_copy = 0;
@@ -200,7 +207,8 @@ FixPEJump::~FixPEJump()
   memory->destroy(vhalf);
   memory->destroy(jump);
   memory->destroy(fstart);
-  memory->destroy(fprev);
+  memory->destroy(fhist1);
+  memory->destroy(fhist2);
   memory->destroy(fsum);
   memory->destroy(fsample);
   memory->destroy(xsave);
@@ -300,6 +308,7 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   reinit_pending = 0;
 
   h_step = update->dt;
+  if (compensate && (hlast2 > 0.0)) compensate_step_change();
   check_lists();
 
   double **x = atom->x;
@@ -313,6 +322,70 @@ void FixPEJump::initial_integrate(int /*vflag*/)
       x[i][1] += c * vhalf[i][1];
       x[i][2] += c * vhalf[i][2];
     }
+}
+
+/* ----------------------------------------------------------------------
+   compensate keyword: with steps h_{n-1}, h_n, h_{n+1} the smooth solution
+   of the jump relation is [v]^n = (h_{n-1} + h_n)/2 a(t_n); the jump
+   [v]^{n+1} = 2 h_n A_n - [v]^n of the last step (A_n its averaged
+   acceleration) falls short of it by
+     d = (h_{n+1} - h_n)/2 a(t_{n+1}) - (h_n - h_{n-1})/2 a(t_n),
+   which feeds the parasitic period-2 mode whenever the step size changes.
+   Add d, with a(t_n), a(t_{n+1}) interpolated linearly from the averages
+   A_{n-1}, A_n of the last two steps (at their mid-step times), less the
+   part along the peculiar velocities w = v^{n+1/2} - V_cm that would
+   change the pseudo-energy (1/2) sum m v^{n+1/2}.v^{n+3/2}; the total
+   momentum is kept too, since sum m a = 0 and sum m w = 0.
+------------------------------------------------------------------------- */
+
+void FixPEJump::compensate_step_change()
+{
+  const double h0 = hlast2, h1 = hlast, h2 = h_step;    // h_{n-1}, h_n, h_{n+1}
+  if ((h2 - h1 == 0.0) && (h1 - h0 == 0.0)) return;
+  const double slope = 1.0 / (0.5 * (h0 + h1));         // per (A_n - A_{n-1})
+  const double c_end = 0.5 * (h2 - h1), c_start = 0.5 * (h1 - h0);
+
+  double **v = atom->v;
+  const double *rmass = atom->rmass;
+  const int *type = atom->type;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const double ftm2v = force->ftm2v;
+
+  // d (velocity units) into fsum, which is free until the quadrature of this step
+  // sums m of: v.d, v.v, and sum m v, sum m (v = v^{n+1/2})
+  double local[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double m = rmass ? rmass[i] : atom->mass[type[i]];
+    const double minv = rmass ? 1.0 / rmass[i] : inverse_mass[type[i]];
+    for (int k = 0; k < 3; k++) {
+      const double an = ftm2v * minv * fhist1[i][k];
+      const double ds = 0.5 * h1 * slope * (an - ftm2v * minv * fhist2[i][k]);
+      fsum[i][k] = c_end * (an + ds) - c_start * (an - ds);
+      const double vk = vhalf[i][k] - jump[i][k];
+      local[0] += m * vk * fsum[i][k];
+      local[1] += m * vk * vk;
+      local[2 + k] += m * vk;
+    }
+    local[5] += m;
+  }
+  double sum[6];
+  MPI_Allreduce(local, sum, 6, MPI_DOUBLE, MPI_SUM, world);
+  const double vcm[3] = {sum[2] / sum[5], sum[3] / sum[5], sum[4] / sum[5]};
+  const double ww = sum[1] - (sum[2] * sum[2] + sum[3] * sum[3] + sum[4] * sum[4]) / sum[5];
+  const double alpha = (ww > 0.0) ? sum[0] / ww : 0.0;
+
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    for (int k = 0; k < 3; k++) {
+      const double delta = fsum[i][k] - alpha * (vhalf[i][k] - jump[i][k] - vcm[k]);
+      jump[i][k] += delta;
+      vhalf[i][k] += delta;
+      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
+    }
+  }
+  cached_step = -1;
 }
 
 /* ----------------------------------------------------------------------
@@ -380,6 +453,16 @@ void FixPEJump::final_integrate()
   if (rest != 0.0) tally_at_node();
   evals_total += evals_step;
   cached_step = -1;
+
+  // history of the step sizes and averaged forces for adapt and compensate
+  hlast2 = hlast;
+  hlast = h_step;
+  if (fhist1) {
+    std::swap(fhist1, fhist2);
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit)
+        for (int k = 0; k < 3; k++) fhist1[i][k] = fsum[i][k];
+  }
 }
 
 /* ---------------------------------------------------------------------- */
@@ -478,7 +561,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 
   reinit_pending = with_start && (init_style == INIT_KICK) && (modify->n_post_force_any > 0);
   started = 1;
-  hprev = 0.0;
+  hlast = hlast2 = 0.0;
   cached_step = -1;
 }
 
@@ -805,9 +888,9 @@ void FixPEJump::choose_next_dt()
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   const double h = update->dt;
-  const bool extrapolate = (hprev > 0.0);
-  const double c1 = extrapolate ? h / (h + hprev) : 0.0;
-  const double c2 = extrapolate ? 1.0 / (h + hprev) : 0.0;
+  const bool extrapolate = (hlast2 > 0.0);    // fhist2 holds the previous step's average
+  const double c1 = extrapolate ? h / (h + hlast2) : 0.0;
+  const double c2 = extrapolate ? 1.0 / (h + hlast2) : 0.0;
 
   // sum m of: P.P, P.Q, Q.Q, P.J, Q.J, J.J, v.v
   double local[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
@@ -816,7 +899,7 @@ void FixPEJump::choose_next_dt()
     const double m = rmass ? rmass[i] : mass[type[i]];
     for (int k = 0; k < 3; k++) {
       const double a = force->ftm2v * fsum[i][k] / m;
-      const double da = extrapolate ? a - force->ftm2v * fprev[i][k] / m : 0.0;
+      const double da = extrapolate ? a - force->ftm2v * fhist2[i][k] / m : 0.0;
       const double P = 2.0 * (a + c1 * da), Q = 2.0 * c2 * da, J = jump[i][k];
       local[0] += m * P * P;
       local[1] += m * P * Q;
@@ -825,10 +908,8 @@ void FixPEJump::choose_next_dt()
       local[4] += m * Q * J;
       local[5] += m * J * J;
       local[6] += m * v[i][k] * v[i][k];
-      fprev[i][k] = fsum[i][k];
     }
   }
-  hprev = h;
   double sum[7];
   MPI_Allreduce(local, sum, 7, MPI_DOUBLE, MPI_SUM, world);
 
@@ -1034,7 +1115,10 @@ void FixPEJump::grow_arrays(int nmax)
   memory->grow(vhalf, nmax, 3, "pe_jump:vhalf");
   memory->grow(jump, nmax, 3, "pe_jump:jump");
   if (rule->has_end_nodes()) memory->grow(fstart, nmax, 3, "pe_jump:fstart");
-  if (adapt) memory->grow(fprev, nmax, 3, "pe_jump:fprev");
+  if (adapt || compensate) {
+    memory->grow(fhist1, nmax, 3, "pe_jump:fhist1");
+    memory->grow(fhist2, nmax, 3, "pe_jump:fhist2");
+  }
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1045,7 +1129,10 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
     vhalf[j][k] = vhalf[i][k];
     jump[j][k] = jump[i][k];
     if (fstart) fstart[j][k] = fstart[i][k];
-    if (fprev) fprev[j][k] = fprev[i][k];
+    if (fhist1) {
+      fhist1[j][k] = fhist1[i][k];
+      fhist2[j][k] = fhist2[i][k];
+    }
   }
 }
 
@@ -1058,8 +1145,10 @@ int FixPEJump::pack_exchange(int i, double *buf)
   for (int k = 0; k < 3; k++) buf[m++] = jump[i][k];
   if (fstart)
     for (int k = 0; k < 3; k++) buf[m++] = fstart[i][k];
-  if (fprev)
-    for (int k = 0; k < 3; k++) buf[m++] = fprev[i][k];
+  if (fhist1) {
+    for (int k = 0; k < 3; k++) buf[m++] = fhist1[i][k];
+    for (int k = 0; k < 3; k++) buf[m++] = fhist2[i][k];
+  }
   return m;
 }
 
@@ -1072,8 +1161,10 @@ int FixPEJump::unpack_exchange(int nlocal, double *buf)
   for (int k = 0; k < 3; k++) jump[nlocal][k] = buf[m++];
   if (fstart)
     for (int k = 0; k < 3; k++) fstart[nlocal][k] = buf[m++];
-  if (fprev)
-    for (int k = 0; k < 3; k++) fprev[nlocal][k] = buf[m++];
+  if (fhist1) {
+    for (int k = 0; k < 3; k++) fhist1[nlocal][k] = buf[m++];
+    for (int k = 0; k < 3; k++) fhist2[nlocal][k] = buf[m++];
+  }
   return m;
 }
 
@@ -1100,7 +1191,8 @@ void FixPEJump::global_state(double *list) const
   list[1] = rule->family();
   list[2] = rule->size();
   list[3] = evals_total;
-  list[4] = hprev;
+  list[4] = hlast;
+  list[5] = hlast2;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1112,7 +1204,8 @@ void FixPEJump::restart(char *buf)
       (static_cast<int>(list[1]) == rule->family()) && (static_cast<int>(list[2]) == rule->size());
   started = (static_cast<int>(list[0]) != 0) && same_rule;
   evals_total = list[3];
-  hprev = list[4];
+  hlast = list[4];
+  hlast2 = list[5];
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "
@@ -1190,7 +1283,7 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
 
 double FixPEJump::memory_usage()
 {
-  double bytes = (double) atom->nmax * 3 * sizeof(double) * (2 + (fstart ? 1 : 0) + (fprev ? 1 : 0));
+  double bytes = (double) atom->nmax * 3 * sizeof(double) * (2 + (fstart ? 1 : 0) + (fhist1 ? 2 : 0));
   bytes += (double) nmax_work * 3 * sizeof(double) * 4;
   return bytes;
 }

@@ -66,8 +66,9 @@ class FixPEJump : public Fix {
  protected:
   enum Init { INIT_KICK, INIT_PAPER };
 
-  // for derived styles: keywords are parsed from arg[first_keyword] on
-  FixPEJump(class LAMMPS *, int, char **, int first_keyword);
+  // for derived styles: keywords are parsed from arg[first_keyword] on,
+  // compensate_default is the default of the compensate keyword
+  FixPEJump(class LAMMPS *, int, char **, int first_keyword, int compensate_default);
 
   PEJump::Quadrature *rule;
   PEJump::ForceSampler *sampler;
@@ -86,8 +87,9 @@ class FixPEJump : public Fix {
   int adapt;
   double adapt_eps, adapt_dtmin, adapt_dtmax;
   double energy_scale;    // |pseudo-energy| at the start of the run
-  double **fprev;         // per atom: quadrature-averaged force of the previous step
-  double hprev;           // previous step size, 0 if there is none
+  double **fhist1, **fhist2;    // per atom: averaged forces of the last two steps
+  double hlast, hlast2;   // sizes of the last two steps, 0 if there are none
+  int compensate;         // compensate the parasitic jump of step-size changes
 
   // per-atom state, velocity units: free-flight velocity v^{n+1/2},
   // jump [v]^n, and (Lobatto rules) the sampled force at the start node
@@ -126,6 +128,7 @@ class FixPEJump : public Fix {
   void tally_at_node();
   bool tally_step() const;
   void choose_next_dt();
+  void compensate_step_change();
   void energies();
   void grow_work();
   int detect_velocity_change();
@@ -143,7 +146,7 @@ class FixPEJump : public Fix {
   virtual void store_start_node();        // Lobatto start-node forces at q^0
   virtual double node_cost();             // evaluations a sampled node costs
   virtual void check_lists();             // neighbor lists valid for this step's nodes
-  static constexpr int NGLOBAL = 5;       // values of the global restart state
+  static constexpr int NGLOBAL = 6;       // values of the global restart state
 };
 
 }    // namespace LAMMPS_NS

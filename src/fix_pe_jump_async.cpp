@@ -56,7 +56,7 @@ static constexpr int NASYNC_GLOBAL = 3;    // K, fine step index, elapsed time
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
-    FixPEJump(lmp, narg, arg, 5), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
+    FixPEJump(lmp, narg, arg, 5, 0), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
     reverse_labels(0), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr), klass(nullptr),
     fcoarse(nullptr), nmax_coarse(0)
 {
@@ -73,6 +73,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
                "steps are fixed (use fix pe_jump for adaptive steps)");
   if (auto_tol > 0.0)
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
+  if (compensate)
+    error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
   if (sample_mask != ForceSampler::ALL)
     error->all(FLERR, "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 

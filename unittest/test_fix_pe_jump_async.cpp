@@ -405,6 +405,8 @@ TEST(PEJumpAsync, BadInputGivesClearErrors)
               ContainsRegex("does not support the adapt keyword"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast sample pair"),
               ContainsRegex("remove the sample keyword"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast compensate yes"),
+              ContainsRegex("does not support compensate yes"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast quadrature auto 1e-6"),
               ContainsRegex("does not support quadrature auto"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast quadrature lobatto 7"),
