@@ -61,8 +61,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 
 /* ---------------------------------------------------------------------- */
 
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword,
-                     int compensate_default) :
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int compensate_default) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
     fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr),
     fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), fnode(nullptr)
@@ -100,14 +99,13 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword,
         npoints = 5;
         iarg += 3;
       } else if ((which == "lobatto") || (which == "legendre")) {
-        if (iarg + 3 > narg)
-          utils::missing_cmd_args(FLERR, fix + " quadrature " + which, error);
+        if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature " + which, error);
         npoints = utils::inumeric(FLERR, arg[iarg + 2], false, lmp);
         family = (which == "lobatto") ? Quadrature::LOBATTO : Quadrature::LEGENDRE;
         const int nmin = (family == Quadrature::LOBATTO) ? 2 : 1;
         if ((npoints < nmin) || (npoints > Quadrature::MAX_POINTS))
-          error->all(FLERR, "Fix {} quadrature {} needs {} to {} points, got {}", style, which, nmin,
-                     Quadrature::MAX_POINTS, npoints);
+          error->all(FLERR, "Fix {} quadrature {} needs {} to {} points, got {}", style, which,
+                     nmin, Quadrature::MAX_POINTS, npoints);
         iarg += 3;
       } else {
         error->all(FLERR, "Unknown fix {} quadrature rule: {}", style, which);
@@ -187,6 +185,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword,
   split_primary = use_copy = 0;
   eflag_step = vflag_step = 0;
   h_step = 0.0;
+  stats_valid = 0;
+  stats[0] = stats[1] = 0.0;
   evals_step = evals_total = 0.0;
   energy_scale = 0.0;
   cached_step = -1;
@@ -270,6 +270,7 @@ void FixPEJump::init()
 void FixPEJump::setup(int /*vflag*/)
 {
   grow_work();
+  stats_valid = 0;
   evals_step = 0.0;
   if (!started) {
     start_scheme(nullptr, true);
@@ -342,7 +343,7 @@ void FixPEJump::compensate_step_change()
 {
   const double h0 = hlast2, h1 = hlast, h2 = h_step;    // h_{n-1}, h_n, h_{n+1}
   if ((h2 - h1 == 0.0) && (h1 - h0 == 0.0)) return;
-  const double slope = 1.0 / (0.5 * (h0 + h1));         // per (A_n - A_{n-1})
+  const double slope = 1.0 / (0.5 * (h0 + h1));    // per (A_n - A_{n-1})
   const double c_end = 0.5 * (h2 - h1), c_start = 0.5 * (h1 - h0);
 
   double **v = atom->v;
@@ -386,6 +387,7 @@ void FixPEJump::compensate_step_change()
     }
   }
   cached_step = -1;
+  stats_valid = 0;
 }
 
 /* ----------------------------------------------------------------------
@@ -434,43 +436,49 @@ void FixPEJump::final_integrate()
 {
   grow_work();
   evals_step = 1.0;
-  quadrature_sum();
+
+  // with a single node, evaluated by the Verlet loop with nothing else to
+  // separate, the forces there are the quadrature average itself
+  const bool direct = (rule->size() == 1) && !split_primary && !adapt;
+  if (!direct) quadrature_sum();
+  double **favg = direct ? atom->f : fsum;
 
   double **x = atom->x;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const int keep_start = rule->has_end_nodes();
+  if (fhist1) std::swap(fhist1, fhist2);
 
+  double vv = 0.0, jj = 0.0;    // largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2, for check_excursion()
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
-    jump_atom(i, h_step, fsum[i]);
-    if (keep_start)
-      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+    jump_atom(i, h_step, favg[i]);
+    for (int k = 0; k < 3; k++) {
+      if (keep_start) fstart[i][k] = fsample[i][k];
+      if (fhist1) fhist1[i][k] = favg[i][k];
+    }
+    vv = MAX(vv, vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
+    jj = MAX(jj, jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
   }
+  stats[0] = std::isfinite(vv) ? vv : BLOWUP;
+  stats[1] = std::isfinite(jj) ? jj : BLOWUP;
+  stats_valid = 1;
 
   if (rest != 0.0) tally_at_node();
   evals_total += evals_step;
   cached_step = -1;
-
-  // history of the step sizes and averaged forces for adapt and compensate
   hlast2 = hlast;
   hlast = h_step;
-  if (fhist1) {
-    std::swap(fhist1, fhist2);
-    for (int i = 0; i < nlocal; i++)
-      if (mask[i] & groupbit)
-        for (int k = 0; k < 3; k++) fhist1[i][k] = fsum[i][k];
-  }
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJump::jump_atom(int i, double h, const double *favg)
 {
-  const double dtfm = 2.0 * h * force->ftm2v *
-      (atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]]);
+  const double dtfm =
+      2.0 * h * force->ftm2v * (atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]]);
   for (int k = 0; k < 3; k++) {
     const double newjump = dtfm * favg[k] - jump[i][k];
     vhalf[i][k] += newjump;
@@ -562,6 +570,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   reinit_pending = with_start && (init_style == INIT_KICK) && (modify->n_post_force_any > 0);
   started = 1;
   hlast = hlast2 = 0.0;
+  stats_valid = 0;
   cached_step = -1;
 }
 
@@ -673,9 +682,8 @@ void FixPEJump::auto_quadrature_sum()
   const std::vector<double> &w = rule->weight;
 
   primary_sampled_force();    // F(1) into fsample
-  const double vnew = (update->eflag_global == update->ntimestep)
-      ? sampler->energy(sample_mask)
-      : potential_now(sample_mask);
+  const double vnew = (update->eflag_global == update->ntimestep) ? sampler->energy(sample_mask)
+                                                                  : potential_now(sample_mask);
   const double dv = vnew - vprev;
   vprev = vnew;
   c_pe->addstep(update->ntimestep + 1);
@@ -823,28 +831,34 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
   double **xhold = (neighbor->dist_check && !primary_only) ? neighbor->get_xhold() : nullptr;
 
   double local[3] = {0.0, 0.0, 0.0};    // excursion^2, step length^2, jump displacement^2
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    const bool both = select && select[i];
-    const double h = both ? hsel : h_step;
-    double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
-    for (int k = 0; k < 3; k++) {
-      vv += vhalf[i][k] * vhalf[i][k];
-      jj += jump[i][k] * jump[i][k];
-      if (xhold) {
-        const double a = x[i][k] - xhold[i][k];
-        const double ends[4] = {a + lo * vhalf[i][k], a + hi * vhalf[i][k],
-                                a + lo2 * vhalf[i][k], a + hi2 * vhalf[i][k]};
-        for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
+  if (primary_only && stats_valid) {
+    // only the magnitudes are needed: final_integrate() took them
+    local[1] = h_step * h_step * stats[0];
+    local[2] = h_step * h_step * stats[1];
+  } else {
+    for (int i = 0; i < nlocal; i++) {
+      if (!(mask[i] & groupbit)) continue;
+      const bool both = select && select[i];
+      const double h = both ? hsel : h_step;
+      double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
+      for (int k = 0; k < 3; k++) {
+        vv += vhalf[i][k] * vhalf[i][k];
+        jj += jump[i][k] * jump[i][k];
+        if (xhold) {
+          const double a = x[i][k] - xhold[i][k];
+          const double ends[4] = {a + lo * vhalf[i][k], a + hi * vhalf[i][k], a + lo2 * vhalf[i][k],
+                                  a + hi2 * vhalf[i][k]};
+          for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
+        }
       }
+      double span = h;
+      if (both) span = MAX(span, MAX(fabs(lo2 - cp), fabs(hi2 - cp)));
+      double step = span * span * vv, jmp = h * h * jj;
+      if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = BLOWUP;
+      local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
+      local[1] = MAX(local[1], step);
+      local[2] = MAX(local[2], jmp);
     }
-    double span = h;
-    if (both) span = MAX(span, MAX(fabs(lo2 - cp), fabs(hi2 - cp)));
-    double step = span * span * vv, jmp = h * h * jj;
-    if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = BLOWUP;
-    local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
-    local[1] = MAX(local[1], step);
-    local[2] = MAX(local[2], jmp);
   }
   double global[3];
   MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_MAX, world);
@@ -917,8 +931,8 @@ void FixPEJump::choose_next_dt()
   const double scale = MAX(energy_scale, 0.5 * mvv2e * sum[6]);
   const double target = 8.0 * ADAPT_SAFETY * adapt_eps * scale / mvv2e;
   const auto jump8 = [&sum](double t) {    // 8/mvv2e times the predicted jump energy
-    return t * t * sum[0] + 2.0 * t * t * t * sum[1] + t * t * t * t * sum[2] -
-        2.0 * t * sum[3] - 2.0 * t * t * sum[4] + sum[5];
+    return t * t * sum[0] + 2.0 * t * t * t * sum[1] + t * t * t * t * sum[2] - 2.0 * t * sum[3] -
+        2.0 * t * t * sum[4] + sum[5];
   };
   const double hcap = MIN(adapt_dtmax, ADAPT_GROWTH * h);
   const double hlow = MIN(adapt_dtmin, hcap);
@@ -1283,7 +1297,8 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
 
 double FixPEJump::memory_usage()
 {
-  double bytes = (double) atom->nmax * 3 * sizeof(double) * (2 + (fstart ? 1 : 0) + (fhist1 ? 2 : 0));
+  double bytes =
+      (double) atom->nmax * 3 * sizeof(double) * (2 + (fstart ? 1 : 0) + (fhist1 ? 2 : 0));
   bytes += (double) nmax_work * 3 * sizeof(double) * 4;
   return bytes;
 }

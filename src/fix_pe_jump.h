@@ -78,24 +78,24 @@ class FixPEJump : public Fix {
   // quadrature auto: defect tolerance (energy), steps done with lobatto 3 and 5
   double auto_tol;
   bigint auto_steps[3];
-  double **fnode;          // work: forces at the middle node
-  char *id_pe;             // compute pe that requests the energy at every step
+  double **fnode;    // work: forces at the middle node
+  char *id_pe;       // compute pe that requests the energy at every step
   class Compute *c_pe;
-  double vprev;            // potential energy at the start of the step
+  double vprev;    // potential energy at the start of the step
 
   // adaptive time step: (1/8)|M^-1/2 [p]|^2 <= eps * energy scale
   int adapt;
   double adapt_eps, adapt_dtmin, adapt_dtmax;
-  double energy_scale;    // |pseudo-energy| at the start of the run
+  double energy_scale;          // |pseudo-energy| at the start of the run
   double **fhist1, **fhist2;    // per atom: averaged forces of the last two steps
-  double hlast, hlast2;   // sizes of the last two steps, 0 if there are none
-  int compensate;         // compensate the parasitic jump of step-size changes
+  double hlast, hlast2;         // sizes of the last two steps, 0 if there are none
+  int compensate;               // compensate the parasitic jump of step-size changes
 
   // per-atom state, velocity units: free-flight velocity v^{n+1/2},
   // jump [v]^n, and (Lobatto rules) the sampled force at the start node
   double **vhalf, **jump, **fstart;
-  int nstate;    // values per atom in exchange and restart buffers
-  std::string stability_hint;    // advice in the instability error
+  int nstate;                          // values per atom in exchange and restart buffers
+  std::string stability_hint;          // advice in the instability error
   std::vector<double> inverse_mass;    // per atom type
 
   // per-step work arrays (not migrated)
@@ -110,7 +110,9 @@ class FixPEJump : public Fix {
   int split_primary;     // 1 if the primary node force must be split
   int use_copy;          // split by copying f before reverse communication
   int eflag_step, vflag_step;
-  double h_step;    // step size used in the current step
+  double h_step;      // step size used in the current step
+  double stats[2];    // largest |v^{n+1/2}|^2, |[v]^n|^2 of the local atoms after the last step
+  int stats_valid;    // stats describe the current state
 
   double evals_step, evals_total;    // force evaluations (units of full ones)
   bigint cached_step;

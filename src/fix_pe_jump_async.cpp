@@ -57,8 +57,8 @@ static constexpr int NASYNC_GLOBAL = 3;    // K, fine step index, elapsed time
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, 0), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
-    reverse_labels(0), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr), klass(nullptr),
-    fcoarse(nullptr), nmax_coarse(0)
+    reverse_labels(0), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr),
+    klass(nullptr), fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -76,7 +76,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   if (compensate)
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
   if (sample_mask != ForceSampler::ALL)
-    error->all(FLERR, "Fix pe_jump/async samples all force contributions: remove the sample keyword");
+    error->all(FLERR,
+               "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
   stability_hint = " (the fine step for the fast atoms) or K (the coarse step for the slow ones)";
   counts[0] = counts[1] = counts[2] = 0.0;

@@ -58,13 +58,13 @@ class FixPEJumpAsync : public FixPEJump {
  protected:
   enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
 
-  int nfine;            // K: fine steps per coarse step
-  int finebit;          // group bit of the fast group
-  int fine_index;       // fine steps done in the current coarse step
-  double elapsed;       // time elapsed in the current coarse step
-  double counts[3];     // global number of slow, mixed, fast atoms
-  int reverse_labels;   // reverse communication carries interface flags
-  bigint split_calls;   // neighbor->ncalls when the interactions were split
+  int nfine;             // K: fine steps per coarse step
+  int finebit;           // group bit of the fast group
+  int fine_index;        // fine steps done in the current coarse step
+  double elapsed;        // time elapsed in the current coarse step
+  double counts[3];      // global number of slow, mixed, fast atoms
+  int reverse_labels;    // reverse communication carries interface flags
+  bigint split_calls;    // neighbor->ncalls when the interactions were split
 
   PEJump::InteractionSplit *split;
 
@@ -74,10 +74,10 @@ class FixPEJumpAsync : public FixPEJump {
   double **facc, **fstart_coarse;
   double *klass;
 
-  double **fcoarse;     // work: coarse quadrature sum of the slow interactions
+  double **fcoarse;    // work: coarse quadrature sum of the slow interactions
   int nmax_coarse;
-  std::vector<int> slow;             // owned atoms: 1 if on the coarse clock
-  std::vector<int> interface_flag;   // owned and ghost atoms: fine with a slow partner
+  std::vector<int> slow;              // owned atoms: 1 if on the coarse clock
+  std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
 
   void start_scheme(const char *, bool) override;
   double kick_step(int) const override;

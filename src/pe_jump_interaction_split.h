@@ -85,9 +85,9 @@ namespace PEJump {
       int on;    // the style exists, so that the neighbor class builds this list
       int *count;
       int ***list;
-      int natoms;        // atoms per entry
-      int nfull;         // entries of the complete list
-      int **full;        // the complete list
+      int natoms;    // atoms per entry
+      int nfull;     // entries of the complete list
+      int **full;    // the complete list
       std::vector<int *> part[2];
     };
     TopoList topo[4];

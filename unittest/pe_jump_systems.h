@@ -65,8 +65,8 @@ inline void fpu_chain(Sim &s, double omega, const double q[6], const double p[6]
                       const std::string &units = "lj")
 {
   s.cmds({"units " + units, "atom_style bond", "atom_modify map array", "boundary f f f",
-          "region box block -2 13 -5 5 -5 5",
-          "create_box 1 box bond/types 2 extra/bond/per/atom 2", "mass 1 1.0"});
+          "region box block -2 13 -5 5 -5 5", "create_box 1 box bond/types 2 extra/bond/per/atom 2",
+          "mass 1 1.0"});
   for (int i = 0; i < 8; ++i)
     s.cmd("create_atoms 1 single " + std::to_string(i * FPU_SPACING) + " 0 0");
   // exact positions and velocities through the API (no text round trip)
@@ -79,10 +79,10 @@ inline void fpu_chain(Sim &s, double omega, const double q[6], const double p[6]
           "bond_coeff 1 harmonic " + std::to_string(0.25 * omega * omega) + " 1.5",
           "bond_coeff 2 class2 1.5 0.0 0.0 1.0"});
   for (int i = 1; i <= 7; ++i)
-    s.cmd("create_bonds single/bond " + std::string(i % 2 ? "2 " : "1 ") + std::to_string(i) +
-          " " + std::to_string(i + 1));
-  s.cmds({"pair_style zero 1.0", "pair_coeff * *", "comm_modify cutoff 4.0",
-          "group walls id 1 8", "group chain id 2:7"});
+    s.cmd("create_bonds single/bond " + std::string(i % 2 ? "2 " : "1 ") + std::to_string(i) + " " +
+          std::to_string(i + 1));
+  s.cmds({"pair_style zero 1.0", "pair_coeff * *", "comm_modify cutoff 4.0", "group walls id 1 8",
+          "group chain id 2:7"});
 }
 
 // the paper's slow/fast chain (section 4.3.1): walls q_0 and q_{2m+1}, m
@@ -160,8 +160,8 @@ inline void lj_liquid(Sim &s, int cells = 4, const std::string &extra_velocity =
   s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "lattice fcc 0.8442",
           "region box block 0 " + c + " 0 " + c + " 0 " + c, "create_box 1 box",
           "create_atoms 1 box", "mass 1 1.0",
-          "velocity all create 1.5 87287 loop geom " + extra_velocity,
-          "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5", "neighbor 0.3 bin",
+          "velocity all create 1.5 87287 loop geom " + extra_velocity, "pair_style lj/cut 2.5",
+          "pair_coeff 1 1 1.0 1.0 2.5", "neighbor 0.3 bin",
           "neigh_modify every 1 delay 0 check yes"});
 }
 

@@ -25,7 +25,10 @@ namespace {
 constexpr double OMEGA = 50.0;
 
 // pseudo-energy H~ = pe + f_ID and discrete energy H = pe + ke after a run
-double pseudo_energy(Sim &s) { return s.eval("c_thermo_pe+f_1"); }
+double pseudo_energy(Sim &s)
+{
+  return s.eval("c_thermo_pe+f_1");
+}
 
 // max - min of the values stored by a fix vector
 double vector_range(Sim &s, const std::string &id)
@@ -198,7 +201,11 @@ TEST(PEJump, PseudoEnergyConservedRandomStepsHarmonicMidpoint)
   std::uniform_real_distribution<double> dt(0.009, 0.011);
   std::vector<double> dev;
   const double worst = single_steps(
-      s, 10000, [&] { return dt(gen); }, &dev);
+      s, 10000,
+      [&] {
+        return dt(gen);
+      },
+      &dev);
   EXPECT_LT(worst, 1e-12);
   // no drift: the deviation wanders like round-off, the mean over the last
   // thousand steps stays at round-off level instead of growing with time
@@ -227,7 +234,11 @@ TEST(PEJump, PseudoEnergyConservedRandomStepsFpuLobatto3)
   s.cmd("fix 1 chain pe_jump quadrature lobatto 3");
   std::mt19937 gen(99);
   std::uniform_real_distribution<double> dt(0.0005, 0.0015);
-  EXPECT_LT(single_steps(s, 10000, [&] { return dt(gen); }), 1e-12);
+  EXPECT_LT(single_steps(s, 10000,
+                         [&] {
+                           return dt(gen);
+                         }),
+            1e-12);
 }
 
 TEST(PEJump, MidpointNotExactOnQuarticSprings)
@@ -440,9 +451,9 @@ TEST(PEJump, SplitRunsAndRestartsAreExact)
       Sim s;
       lj_liquid(s);
       s.cmds({fix, "timestep 0.005", "thermo 50", "run 100 post no",
-              "write_restart pe_jump_split.restart", "clear",
-              "read_restart pe_jump_split.restart", "neighbor 0.3 bin",
-              "neigh_modify every 1 delay 0 check yes", fix, "thermo 50", "run 100 post no"});
+              "write_restart pe_jump_split.restart", "clear", "read_restart pe_jump_split.restart",
+              "neighbor 0.3 bin", "neigh_modify every 1 delay 0 check yes", fix, "thermo 50",
+              "run 100 post no"});
       restarted = lj_state(s);
       std::remove("pe_jump_split.restart");
     }
@@ -507,10 +518,9 @@ TEST(PEJump, ForceEvaluationsPerStep)
     int per_step;    // evaluations on steps without energy output
     int extra;       // extra evaluation on energy output steps
   };
-  for (const Case &c :
-       {Case{"midpoint", 1, 1}, Case{"legendre 2", 2, 1}, Case{"legendre 3", 3, 1},
-        Case{"legendre 5", 5, 1}, Case{"lobatto 2", 1, 0}, Case{"lobatto 3", 2, 0},
-        Case{"lobatto 5", 4, 0}}) {
+  for (const Case &c : {Case{"midpoint", 1, 1}, Case{"legendre 2", 2, 1}, Case{"legendre 3", 3, 1},
+                        Case{"legendre 5", 5, 1}, Case{"lobatto 2", 1, 0}, Case{"lobatto 3", 2, 0},
+                        Case{"lobatto 5", 4, 0}}) {
     Sim s;
     (*s.lmp->force->pair_map)["lj/cut/counting"] = &counting_creator;
     lj_liquid(s);
@@ -534,8 +544,8 @@ TEST(PEJump, EnergyAndPressureAreNodeValues)
   for (const std::string rule : {"midpoint", "lobatto 3"}) {
     Sim s;
     lj_liquid(s);
-    s.cmds({"fix 1 all pe_jump quadrature " + rule, "timestep 0.005", "thermo 10",
-            "run 50 post no"});
+    s.cmds(
+        {"fix 1 all pe_jump quadrature " + rule, "timestep 0.005", "thermo 10", "run 50 post no"});
     const double pe = s.eval("c_thermo_pe");
     const double press = s.eval("c_thermo_press");
     s.cmds({"unfix 1", "run 0 post no"});
@@ -563,8 +573,8 @@ TEST(PEJump, ConservesInUnitSystemsMassStylesAndNewton)
     if (variant == "2d") s.cmd("region box2 block 0 12 -5 5 -0.5 0.5");
     for (int i = 0; i < 12; ++i)
       s.cmd(fmt::format("create_atoms 1 single {} {} 0", i + 0.5 + 0.05 * std::sin(i), 0.0));
-    s.cmds({"bond_style harmonic", "bond_coeff 1 50.0 1.0", "pair_style zero 1.0",
-            "pair_coeff * *", "velocity all create 1.0 4411 loop geom"});
+    s.cmds({"bond_style harmonic", "bond_coeff 1 50.0 1.0", "pair_style zero 1.0", "pair_coeff * *",
+            "velocity all create 1.0 4411 loop geom"});
     s.cmd("velocity all set NULL 0.0 0.0");
     for (int i = 1; i <= 12; ++i)
       s.cmd(fmt::format("create_bonds single/bond 1 {} {}", i, i % 12 + 1));
@@ -573,9 +583,9 @@ TEST(PEJump, ConservesInUnitSystemsMassStylesAndNewton)
       s.cmd("set atom 1*6 mass 2.0");
       s.cmd("set atom 7*12 mass 0.5");
     }
-    const double h = (units == "lj") ? 0.01 : (units == "real" ? 1.0 : (units == "metal" ? 0.001 : 1e-15));
-    s.cmds({"fix 1 all pe_jump", fmt::format("timestep {}", h), "thermo 100",
-            "run 0 post no"});
+    const double h = (units == "lj") ? 0.01
+                                     : (units == "real" ? 1.0 : (units == "metal" ? 0.001 : 1e-15));
+    s.cmds({"fix 1 all pe_jump", fmt::format("timestep {}", h), "thermo 100", "run 0 post no"});
     const double h0 = pseudo_energy(s);
     s.cmd("run 2000 post no");
     EXPECT_LT(std::fabs(pseudo_energy(s) - h0) / std::fabs(h0), 1e-12) << variant;
@@ -593,8 +603,7 @@ TEST(PEJump, ConsistentUnderFixDtReset)
   Sim s;
   fpu_gni(s);
   s.cmds({"fix 1 chain pe_jump quadrature lobatto 3", "timestep 0.001",
-          "fix 2 chain dt/reset 1 1.0e-4 2.0e-3 0.001 units box", "thermo 1000",
-          "run 0 post no"});
+          "fix 2 chain dt/reset 1 1.0e-4 2.0e-3 0.001 units box", "thermo 1000", "run 0 post no"});
   const double h0 = pseudo_energy(s);
   s.cmd("run 20000 post no");
   EXPECT_LT(std::fabs(pseudo_energy(s) - h0) / std::fabs(h0), 1e-12);
@@ -607,8 +616,9 @@ TEST(PEJump, AdaptHoldsBoundAndStepGrowsBack)
   fpu_gni(s);
   s.cmds({"fix 1 chain pe_jump quadrature lobatto 3 adapt 1e-6 1e-5 0.004", "timestep 1e-5",
           "compute ke all ke", "variable a equal abs(c_thermo_pe+f_1)",
-          "variable ratio equal f_1[2]/((v_a>c_ke)*v_a+(v_a<=c_ke)*c_ke)", "variable dt equal f_1[3]",
-          "fix r all vector 1 v_ratio v_dt", "thermo 0", "run 3000 post no"});
+          "variable ratio equal f_1[2]/((v_a>c_ke)*v_a+(v_a<=c_ke)*c_ke)",
+          "variable dt equal f_1[3]", "fix r all vector 1 v_ratio v_dt", "thermo 0",
+          "run 3000 post no"});
   auto *vec = s.lmp->modify->get_fix_by_id("r");
   double worst = 0.0, dtmin = 1e300, dtmax = 0.0;
   for (int i = 10; i < vec->size_array_rows; ++i) {
@@ -616,13 +626,13 @@ TEST(PEJump, AdaptHoldsBoundAndStepGrowsBack)
     dtmin = std::min(dtmin, vec->compute_array(i, 1));
     dtmax = std::max(dtmax, vec->compute_array(i, 1));
   }
-  std::cout << "adapt: max jump energy / bound = " << worst / 1e-6 << ", dt in [" << dtmin
-            << ", " << dtmax << "]\n";
+  std::cout << "adapt: max jump energy / bound = " << worst / 1e-6 << ", dt in [" << dtmin << ", "
+            << dtmax << "]\n";
   // the bound holds after every step (with the linear extrapolation of the
   // averaged force; the previous rule that kept it constant overshot 2.2x)
   EXPECT_LT(worst, 1e-6);
-  EXPECT_LT(dtmin, 0.004);     // the step shrank ...
-  EXPECT_GT(dtmin, 1e-5);      // ... without cascading to dtmin
+  EXPECT_LT(dtmin, 0.004);    // the step shrank ...
+  EXPECT_GT(dtmin, 1e-5);     // ... without cascading to dtmin
   EXPECT_GT(dtmax / dtmin, 1.5);
 }
 
@@ -632,16 +642,22 @@ TEST(PEJump, AdaptHoldsBoundAndStepGrowsBack)
 
 TEST(PEJump, BadInputGivesClearErrors)
 {
-  const std::vector<std::string> setup = {"units lj", "atom_style atomic", "region b block 0 5 0 5 0 5",
-                                          "create_box 1 b", "create_atoms 1 single 1 1 1",
-                                          "mass 1 1.0", "pair_style zero 2.0", "pair_coeff * *"};
+  const std::vector<std::string> setup = {"units lj",
+                                          "atom_style atomic",
+                                          "region b block 0 5 0 5 0 5",
+                                          "create_box 1 b",
+                                          "create_atoms 1 single 1 1 1",
+                                          "mass 1 1.0",
+                                          "pair_style zero 2.0",
+                                          "pair_coeff * *"};
   struct Case {
     std::string command, regex;
   };
   for (const Case &c : {
            Case{"fix 1 all pe_jump bogus", "Unknown fix pe_jump keyword: bogus"},
            Case{"fix 1 all pe_jump quadrature", "Illegal fix pe_jump quadrature command: missing"},
-           Case{"fix 1 all pe_jump quadrature simpson", "Unknown fix pe_jump quadrature rule: simpson"},
+           Case{"fix 1 all pe_jump quadrature simpson",
+                "Unknown fix pe_jump quadrature rule: simpson"},
            Case{"fix 1 all pe_jump quadrature lobatto", "missing argument"},
            Case{"fix 1 all pe_jump quadrature lobatto 1", "lobatto needs 2 to 5 points, got 1"},
            Case{"fix 1 all pe_jump quadrature lobatto 6", "lobatto needs 2 to 5 points, got 6"},
@@ -669,9 +685,13 @@ TEST(PEJump, BadInputGivesClearErrors)
   respa.push_back("run_style respa 2 2");
   EXPECT_THAT(error_of(respa, "run 1"), ContainsRegex("does not support run_style respa"));
 
-  const std::vector<std::string> sphere = {"units lj", "atom_style sphere", "region b block 0 5 0 5 0 5",
-                                           "create_box 1 b", "create_atoms 1 single 1 1 1",
-                                           "pair_style zero 2.0", "pair_coeff * *",
+  const std::vector<std::string> sphere = {"units lj",
+                                           "atom_style sphere",
+                                           "region b block 0 5 0 5 0 5",
+                                           "create_box 1 b",
+                                           "create_atoms 1 single 1 1 1",
+                                           "pair_style zero 2.0",
+                                           "pair_coeff * *",
                                            "fix 1 all pe_jump"};
   EXPECT_THAT(error_of(sphere, "run 1"), ContainsRegex("integrates point particles only"));
 }

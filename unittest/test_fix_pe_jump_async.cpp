@@ -56,8 +56,9 @@ std::vector<double> chain_at(double T, double hf, int K, const std::string &rule
 {
   Sim s;
   chain(s);
-  const std::string fix = K ? fmt::format("fix 1 chain pe_jump/async {} fast quadrature {}", K, rule)
-                            : "fix 1 chain pe_jump quadrature " + rule;
+  const std::string fix = K
+      ? fmt::format("fix 1 chain pe_jump/async {} fast quadrature {}", K, rule)
+      : "fix 1 chain pe_jump quadrature " + rule;
   const int nsteps = static_cast<int>(std::lround(T / hf));
   s.cmds({fix, fmt::format("timestep {:.17g}", hf), "thermo 0",
           fmt::format("run {} post no", nsteps)});
@@ -307,10 +308,9 @@ TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone)
   lj_liquid(s);
   // a cold crystal keeps its pair count, so that the count is exact
   s.cmds({"velocity all scale 0.001", "pair_style lj/cut/counting 2.5",
-          "pair_coeff 1 1 1.0 1.0 2.5",
-          "region slab block 0 1 INF INF INF INF units lattice", "group fast region slab",
-          "fix 1 all pe_jump/async 5 fast quadrature midpoint", "timestep 0.005", "thermo 0",
-          "neigh_modify every 1 delay 0 check no", "run 0 post no"});
+          "pair_coeff 1 1 1.0 1.0 2.5", "region slab block 0 1 INF INF INF INF units lattice",
+          "group fast region slab", "fix 1 all pe_jump/async 5 fast quadrature midpoint",
+          "timestep 0.005", "thermo 0", "neigh_modify every 1 delay 0 check no", "run 0 post no"});
   // fine fraction: pairs of the (full) list that involve a fast atom
   auto *list = s.lmp->force->pair->list;
   const int *mask = s.lmp->atom->mask;
@@ -364,9 +364,8 @@ TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact)
       chain(s);
       s.cmds({fix, "timestep 5e-4", "thermo 0", "run 333 post no"});
       EXPECT_EQ(s.vec("1", 5), 0.0);    // inside a coarse step
-      s.cmds({"write_restart pe_jump_async.restart", "clear",
-              "read_restart pe_jump_async.restart", "comm_modify cutoff 4.0", fix, "thermo 0",
-              "run 667 post no"});
+      s.cmds({"write_restart pe_jump_async.restart", "clear", "read_restart pe_jump_async.restart",
+              "comm_modify cutoff 4.0", fix, "thermo 0", "run 667 post no"});
       restarted = chain_q(s);
       std::remove("pe_jump_async.restart");
     }
@@ -382,20 +381,19 @@ TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact)
 
 TEST(PEJumpAsync, BadInputGivesClearErrors)
 {
-  const std::vector<std::string> base = {
-      "units lj",
-      "atom_style bond",
-      "region box block 0 10 0 10 0 10",
-      "create_box 2 box bond/types 1 extra/bond/per/atom 2",
-      "create_atoms 1 single 1 1 1",
-      "create_atoms 1 single 2 1 1",
-      "create_atoms 2 single 5 5 5",
-      "mass * 1.0",
-      "pair_style lj/cut 2.5",
-      "pair_coeff * * 1.0 1.0",
-      "group fast type 1",
-      "group empty type 3",
-      "group one id 1"};
+  const std::vector<std::string> base = {"units lj",
+                                         "atom_style bond",
+                                         "region box block 0 10 0 10 0 10",
+                                         "create_box 2 box bond/types 1 extra/bond/per/atom 2",
+                                         "create_atoms 1 single 1 1 1",
+                                         "create_atoms 1 single 2 1 1",
+                                         "create_atoms 2 single 5 5 5",
+                                         "mass * 1.0",
+                                         "pair_style lj/cut 2.5",
+                                         "pair_coeff * * 1.0 1.0",
+                                         "group fast type 1",
+                                         "group empty type 3",
+                                         "group one id 1"};
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 0 fast"), ContainsRegex("K >= 1"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5"),
               ContainsRegex("Illegal fix pe_jump/async command: missing argument"));
@@ -439,21 +437,20 @@ TEST(PEJumpAsync, BadInputGivesClearErrors)
                                             "fix 1 all pe_jump/async 5 fast"};
   EXPECT_THAT(error_of(silicon, "run 1"),
               ContainsRegex("cannot split the many-body pair style sw"));
-  const std::vector<std::string> charged = {
-      "units lj",
-      "atom_style charge",
-      "region box block 0 10 0 10 0 10",
-      "create_box 2 box",
-      "create_atoms 1 single 1 1 1",
-      "create_atoms 2 single 5 5 5",
-      "mass * 1.0",
-      "set type 1 charge 0.5",
-      "set type 2 charge -0.5",
-      "pair_style lj/cut/coul/long 2.5",
-      "pair_coeff * * 1.0 1.0",
-      "kspace_style ewald 1e-4",
-      "group fast type 1",
-      "fix 1 all pe_jump/async 5 fast"};
+  const std::vector<std::string> charged = {"units lj",
+                                            "atom_style charge",
+                                            "region box block 0 10 0 10 0 10",
+                                            "create_box 2 box",
+                                            "create_atoms 1 single 1 1 1",
+                                            "create_atoms 2 single 5 5 5",
+                                            "mass * 1.0",
+                                            "set type 1 charge 0.5",
+                                            "set type 2 charge -0.5",
+                                            "pair_style lj/cut/coul/long 2.5",
+                                            "pair_coeff * * 1.0 1.0",
+                                            "kspace_style ewald 1e-4",
+                                            "group fast type 1",
+                                            "fix 1 all pe_jump/async 5 fast"};
   EXPECT_THAT(error_of(charged, "run 1"), ContainsRegex("cannot split k-space \\(ewald\\)"));
 }
 
@@ -469,8 +466,7 @@ TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected)
     harmonic_ring(s, 20, 10.0, 1.0, 7);
     // slow atoms move up to ~0.15 per coarse step: the skin must cover it
     s.cmds({"neighbor 1.0 bin", "group fast id 1:10",
-            fmt::format("fix 1 all pe_jump/async {} fast", K),
-            "timestep 0.01", "thermo 100",
+            fmt::format("fix 1 all pe_jump/async {} fast", K), "timestep 0.01", "thermo 100",
             "thermo_style custom step pe f_1[1] f_1[2]"});
   };
   {

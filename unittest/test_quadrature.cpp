@@ -40,9 +40,7 @@ TEST_P(QuadratureRule, SymmetricNodesAndUnitWeight)
     EXPECT_GT(q.weight[k], 0.0);
     EXPECT_GE(q.node[k], 0.0);
     EXPECT_LE(q.node[k], 1.0);
-    if (k > 0) {
-      EXPECT_LT(q.node[k - 1], q.node[k]);
-    }
+    if (k > 0) { EXPECT_LT(q.node[k - 1], q.node[k]); }
     EXPECT_NEAR(q.node[k], 1.0 - q.node[q.size() - 1 - k], 1.2e-16);
     EXPECT_DOUBLE_EQ(q.weight[k], q.weight[q.size() - 1 - k]);
   }
@@ -70,16 +68,13 @@ TEST_P(QuadratureRule, ExactUpToItsDegreeOnly)
   EXPECT_GT(miss, 1e-6) << q.name() << " exact beyond its degree";
 }
 
-INSTANTIATE_TEST_SUITE_P(Rules, QuadratureRule,
-                         ::testing::Values(RuleCase{Quadrature::LEGENDRE, 1, 1},
-                                           RuleCase{Quadrature::LEGENDRE, 2, 3},
-                                           RuleCase{Quadrature::LEGENDRE, 3, 5},
-                                           RuleCase{Quadrature::LEGENDRE, 4, 7},
-                                           RuleCase{Quadrature::LEGENDRE, 5, 9},
-                                           RuleCase{Quadrature::LOBATTO, 2, 1},
-                                           RuleCase{Quadrature::LOBATTO, 3, 3},
-                                           RuleCase{Quadrature::LOBATTO, 4, 5},
-                                           RuleCase{Quadrature::LOBATTO, 5, 7}));
+INSTANTIATE_TEST_SUITE_P(
+    Rules, QuadratureRule,
+    ::testing::Values(RuleCase{Quadrature::LEGENDRE, 1, 1}, RuleCase{Quadrature::LEGENDRE, 2, 3},
+                      RuleCase{Quadrature::LEGENDRE, 3, 5}, RuleCase{Quadrature::LEGENDRE, 4, 7},
+                      RuleCase{Quadrature::LEGENDRE, 5, 9}, RuleCase{Quadrature::LOBATTO, 2, 1},
+                      RuleCase{Quadrature::LOBATTO, 3, 3}, RuleCase{Quadrature::LOBATTO, 4, 5},
+                      RuleCase{Quadrature::LOBATTO, 5, 7}));
 
 TEST(Quadrature, KnownNodesToFullPrecision)
 {

@@ -28,8 +28,8 @@ void bonded_lattice(Sim &s)
           "create_box 1 box bond/types 1 extra/bond/per/atom 6 extra/special/per/atom 30",
           "create_atoms 1 box", "mass 1 1.0", "pair_style lj/cut 1.1225", "pair_coeff 1 1 1.0 1.0",
           "bond_style harmonic", "bond_coeff 1 40.0 1.26", "special_bonds lj 0.0 1.0 1.0",
-          "create_bonds many all all 1 1.2 1.32",
-          "comm_modify cutoff 3.0", "velocity all create 1.0 4928459 loop geom"});
+          "create_bonds many all all 1 1.2 1.32", "comm_modify cutoff 3.0",
+          "velocity all create 1.0 4928459 loop geom"});
 }
 
 // positions and velocities after a short run on nranks ranks, ordered by the
@@ -69,7 +69,9 @@ std::vector<double> run_on(int nranks, const std::string &fix, bool bonded)
         return std::make_tuple(std::lround(1e6 * x0[3 * i]), std::lround(1e6 * x0[3 * i + 1]),
                                std::lround(1e6 * x0[3 * i + 2]));
       };
-      std::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
+      std::sort(order.begin(), order.end(), [&](int a, int b) {
+        return key(a) < key(b);
+      });
       for (int i : order) out.insert(out.end(), &x[3 * i], &x[3 * i + 3]);
       for (int i : order) out.insert(out.end(), &v[3 * i], &v[3 * i + 3]);
     }
