@@ -860,6 +860,17 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
       local[2] = MAX(local[2], jmp);
     }
   }
+  finish_check(local);
+}
+
+/* ----------------------------------------------------------------------
+   local = largest excursion^2 from the last build positions (0 if not
+   checked), step length^2 and jump displacement^2 of the local atoms:
+   stop on instability, request a rebuild where needed
+------------------------------------------------------------------------- */
+
+void FixPEJump::finish_check(const double *local)
+{
   double global[3];
   MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_MAX, world);
 
@@ -878,7 +889,7 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
                "Fix {}: atoms move more than half the neighbor skin ({}) between the force "
                "evaluations of step {}: reduce the time step (or K) or increase the skin",
                style, neighbor->skin, update->ntimestep);
-  if (xhold && (global[0] > limit)) next_reneighbor = update->ntimestep;
+  if (global[0] > limit) next_reneighbor = update->ntimestep;
 }
 
 /* ----------------------------------------------------------------------

@@ -127,6 +127,7 @@ class FixPEJump : public Fix {
                     double **acc, double **fend);
   void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
                        double hi2 = 0.0, double hsel = 0.0);
+  void finish_check(const double *local);
   void tally_at_node();
   bool tally_step() const;
   void choose_next_dt();

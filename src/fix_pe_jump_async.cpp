@@ -44,6 +44,7 @@
 #include "pe_jump_quadrature.h"
 #include "update.h"
 
+#include <cmath>
 #include <cstring>
 
 using namespace LAMMPS_NS;
@@ -51,7 +52,8 @@ using namespace FixConst;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
 
-static constexpr int NASYNC_GLOBAL = 3;    // K, fine step index, elapsed time
+static constexpr int NASYNC_GLOBAL = 3;      // K, fine step index, elapsed time
+static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in reductions
 
 /* ---------------------------------------------------------------------- */
 
@@ -179,6 +181,7 @@ void FixPEJumpAsync::post_neighbor()
 {
   split->build();
   split_calls = neighbor->ncalls;
+  find_slow();    // atoms are reordered only when the lists are rebuilt
 }
 
 /* ---------------------------------------------------------------------- */
@@ -188,6 +191,7 @@ void FixPEJumpAsync::setup(int vflag)
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
+  find_slow();
   FixPEJump::setup(vflag);
   label_classes();
 }
@@ -285,12 +289,20 @@ void FixPEJumpAsync::find_slow()
 
 void FixPEJumpAsync::check_lists()
 {
-  find_slow();
   const int first = rule->has_end_nodes() ? 1 : 0;
   const double c_lo = rule->node[first];
-  const double c_hi = tally_step() ? 1.0 : rule->node.back();
+  const bool tally = tally_step();
+  const double c_hi = tally ? 1.0 : rule->node.back();
   const double coarse_step = nfine * h_step;
-  if (fine_index + 1 < nfine) {
+  const bool coarse_end = (fine_index + 1 >= nfine);
+  if (!coarse_end && !tally && (rule->size() == 1) && stats_valid) {
+    // forces only at the primary node, which the Verlet loop checks itself:
+    // only the magnitudes are needed, final_integrate() took them per clock
+    const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
+    const double local[3] = {0.0, MAX(hf2 * stats[0], hs2 * stats_slow[0]),
+                             MAX(hf2 * stats[1], hs2 * stats_slow[1])};
+    finish_check(local);
+  } else if (!coarse_end) {
     check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), 0.0, 0.0, coarse_step);
   } else {
     const double span = elapsed + h_step;
@@ -336,15 +348,20 @@ void FixPEJumpAsync::final_integrate()
     memory->destroy(fcoarse);
     memory->create(fcoarse, nmax_coarse, 3, "pe_jump/async:fcoarse");
   }
-  find_slow();
 
   const bool coarse_end = (fine_index + 1 >= nfine);
   const double coarse_step = elapsed + h_step;
 
+  // with a single node, evaluated by the Verlet loop with nothing else to
+  // separate, the forces there are the fine quadrature average itself
   evals_step = split->fraction(InteractionSplit::FINE);
-  split->activate(InteractionSplit::FINE);
-  quadrature_sum();
-  split->restore();
+  const bool direct = (rule->size() == 1) && !split_primary;
+  if (!direct) {
+    split->activate(InteractionSplit::FINE);
+    quadrature_sum();
+    split->restore();
+  }
+  double **favg = direct ? atom->f : fsum;
   if (coarse_end) coarse_quadrature_sum(coarse_step);
 
   double **x = atom->x;
@@ -353,25 +370,35 @@ void FixPEJumpAsync::final_integrate()
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const int keep_start = rule->has_end_nodes();
 
+  double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};    // per clock: largest |v|^2, |[v]|^2
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
     if (keep_start)
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
     if (!slow[i]) {
-      jump_atom(i, h_step, fsum[i]);
-      continue;
-    }
-    for (int k = 0; k < 3; k++) facc[i][k] += h_step * fsum[i][k];
-    if (coarse_end) {
-      double favg[3];
-      for (int k = 0; k < 3; k++) {
-        favg[k] = facc[i][k] / coarse_step + fcoarse[i][k];
-        facc[i][k] = 0.0;
+      jump_atom(i, h_step, favg[i]);
+    } else {
+      for (int k = 0; k < 3; k++) facc[i][k] += h_step * favg[i][k];
+      if (coarse_end) {
+        double fslow[3];
+        for (int k = 0; k < 3; k++) {
+          fslow[k] = facc[i][k] / coarse_step + fcoarse[i][k];
+          facc[i][k] = 0.0;
+        }
+        jump_atom(i, coarse_step, fslow);
       }
-      jump_atom(i, coarse_step, favg);
     }
+    double *m = mag[slow[i]];
+    m[0] = MAX(m[0],
+               vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
+    m[1] = MAX(m[1], jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
   }
+  for (int k = 0; k < 2; k++) {
+    stats[k] = std::isfinite(mag[0][k]) ? mag[0][k] : BLOWUP;
+    stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : BLOWUP;
+  }
+  stats_valid = 1;
 
   tally_at_node();
   evals_total += evals_step;

@@ -58,13 +58,14 @@ class FixPEJumpAsync : public FixPEJump {
  protected:
   enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
 
-  int nfine;             // K: fine steps per coarse step
-  int finebit;           // group bit of the fast group
-  int fine_index;        // fine steps done in the current coarse step
-  double elapsed;        // time elapsed in the current coarse step
-  double counts[3];      // global number of slow, mixed, fast atoms
-  int reverse_labels;    // reverse communication carries interface flags
-  bigint split_calls;    // neighbor->ncalls when the interactions were split
+  int nfine;               // K: fine steps per coarse step
+  int finebit;             // group bit of the fast group
+  int fine_index;          // fine steps done in the current coarse step
+  double elapsed;          // time elapsed in the current coarse step
+  double counts[3];        // global number of slow, mixed, fast atoms
+  double stats_slow[2];    // largest |v|^2, |[v]|^2 of the local slow atoms
+  int reverse_labels;      // reverse communication carries interface flags
+  bigint split_calls;      // neighbor->ncalls when the interactions were split
 
   PEJump::InteractionSplit *split;
 
