@@ -20,17 +20,12 @@
 
 #include "fix_pe_jump.h"
 
-#include "angle.h"
 #include "atom.h"
-#include "bond.h"
 #include "comm.h"
 #include "compute.h"
-#include "dihedral.h"
 #include "domain.h"
 #include "error.h"
 #include "force.h"
-#include "improper.h"
-#include "kspace.h"
 #include "memory.h"
 #include "modify.h"
 #include "neighbor.h"
@@ -52,6 +47,9 @@ using PEJump::Quadrature;
 static constexpr double ADAPT_GROWTH = 1.05;    // largest step growth factor per step
 static constexpr double ADAPT_SAFETY = 0.5;     // aim at this fraction of the bound
 static constexpr double BLOWUP = 1.0e300;       // stands for a non-finite value in reductions
+static constexpr double STOP_GROWTH = 1.0e6;    // jump growth that is always instability
+static constexpr double HINT_GROWTH = 2.0;      // ... that is instability if atoms move far
+static constexpr int REF_STEPS = 1;             // steps that set the reference jump magnitude
 static constexpr int ADAPT_SAMPLES = 64;        // trial steps between dtmax and dtmin
 static constexpr int ADAPT_BISECT = 40;         // bisections of the largest admissible step
 
@@ -154,7 +152,6 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int c
 
   rule = new Quadrature(family, npoints);
   sampler = new ForceSampler(lmp);
-  stability_hint = adapt ? "" : ", or use the adapt keyword";
 
   // quadrature auto needs the potential energy at every step: a compute pe
   // asks the Verlet loop to tally it
@@ -187,6 +184,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int c
   h_step = 0.0;
   stats_valid = 0;
   stats[0] = stats[1] = 0.0;
+  jump_ref = 0.0;
+  ref_checks = 0;
   evals_step = evals_total = 0.0;
   energy_scale = 0.0;
   cached_step = -1;
@@ -258,6 +257,18 @@ void FixPEJump::init()
     c_pe = modify->get_compute_by_id(id_pe);
     if (!c_pe) error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
   }
+  // forces of other fixes enter with weight 1 at the primary node: fixes
+  // that replace forces hold atoms only where that is the whole quadrature
+  if (!replaced_forces_exact() && (comm->me == 0))
+    for (const auto &ifix : modify->get_fix_list())
+      if (utils::strmatch(ifix->style, "^setforce") || utils::strmatch(ifix->style, "^aveforce") ||
+          utils::strmatch(ifix->style, "^freeze") || utils::strmatch(ifix->style, "^lineforce") ||
+          utils::strmatch(ifix->style, "^planeforce"))
+        error->warning(FLERR,
+                       "Fix {} replaces forces, but fix {} with quadrature {} adds the forces of "
+                       "other fixes to those it samples: it does not hold the atoms of fix {}. "
+                       "Leave them out of the group of fix {}",
+                       ifix->style, style, rule->name(), ifix->id, id);
   if (present && !(sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
@@ -271,6 +282,8 @@ void FixPEJump::setup(int /*vflag*/)
 {
   grow_work();
   stats_valid = 0;
+  jump_ref = 0.0;
+  ref_checks = 0;
   evals_step = 0.0;
   if (!started) {
     start_scheme(nullptr, true);
@@ -830,11 +843,14 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
   const bool primary_only = !select && (lo == cp) && (hi == cp);
   double **xhold = (neighbor->dist_check && !primary_only) ? neighbor->get_xhold() : nullptr;
 
-  double local[3] = {0.0, 0.0, 0.0};    // excursion^2, step length^2, jump displacement^2
+  // excursion^2, step length^2, jump displacement^2, |[v]|^2, |v^{n+1/2}|^2
+  double local[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
   if (primary_only && stats_valid) {
     // only the magnitudes are needed: final_integrate() took them
     local[1] = h_step * h_step * stats[0];
     local[2] = h_step * h_step * stats[1];
+    local[3] = stats[1];
+    local[4] = stats[0];
   } else {
     for (int i = 0; i < nlocal; i++) {
       if (!(mask[i] & groupbit)) continue;
@@ -854,10 +870,12 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
       double span = h;
       if (both) span = MAX(span, MAX(fabs(lo2 - cp), fabs(hi2 - cp)));
       double step = span * span * vv, jmp = h * h * jj;
-      if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = BLOWUP;
+      if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = vv = jj = BLOWUP;
       local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
       local[1] = MAX(local[1], step);
       local[2] = MAX(local[2], jmp);
+      local[3] = MAX(local[3], jj);
+      local[4] = MAX(local[4], vv);
     }
   }
   finish_check(local);
@@ -865,24 +883,35 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
 
 /* ----------------------------------------------------------------------
    local = largest excursion^2 from the last build positions (0 if not
-   checked), step length^2 and jump displacement^2 of the local atoms:
-   stop on instability, request a rebuild where needed
+   checked), step length^2, jump displacement^2 (h |[v]|)^2, |[v]|^2 and
+   |v^{n+1/2}|^2 of the local atoms. The scheme is unstable if the jumps
+   have grown by more than STOP_GROWTH since the first steps of the run, or
+   by more than HINT_GROWTH while moving atoms (or their jumps) by more than
+   half the skin; a large step that is stable only needs a larger skin.
+   Otherwise request a rebuild where the nodes leave the skin.
 ------------------------------------------------------------------------- */
 
 void FixPEJump::finish_check(const double *local)
 {
-  double global[3];
-  MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_MAX, world);
+  double global[5];
+  MPI_Allreduce(local, global, 5, MPI_DOUBLE, MPI_MAX, world);
+
+  // reference magnitude: the largest jump or velocity at the start of the run
+  if (ref_checks < REF_STEPS) {
+    jump_ref = MAX(jump_ref, MAX(global[3], global[4]));
+    if (jump_ref > 0.0) ++ref_checks;
+  }
+  const double growth = (jump_ref > 0.0) ? sqrt(global[3] / jump_ref) : 0.0;
 
   const double half_skin = 0.5 * neighbor->skin;
   const double limit = (half_skin > 0.0) ? half_skin * half_skin : BLOWUP;
-  if (global[2] >= limit) {
+  const bool large = (global[1] >= limit) || (global[2] >= limit);
+  if ((growth >= STOP_GROWTH) || (large && (growth >= HINT_GROWTH))) {
     energies();
     error->all(FLERR,
-               "Fix {} is unstable at step {}: the momentum jumps grow without bound (jump "
-               "energy {:.8g}). The time step {} is beyond the stability limit (for a harmonic "
-               "bond dt < 2 sqrt(m/k)): reduce it{}",
-               style, update->ntimestep, cached[1], h_step, stability_hint);
+               "Fix {} is unstable at step {}: the momentum jumps grew {:.3g}-fold since the "
+               "start of the run (jump energy {:.8g}). {}",
+               style, update->ntimestep, growth, cached[1], instability_advice());
   }
   if (global[1] >= limit)
     error->all(FLERR,
@@ -890,6 +919,33 @@ void FixPEJump::finish_check(const double *local)
                "evaluations of step {}: reduce the time step (or K) or increase the skin",
                style, neighbor->skin, update->ntimestep);
   if (global[0] > limit) next_reneighbor = update->ntimestep;
+}
+
+/* ----------------------------------------------------------------------
+   forces set by other fixes are the step's average only if the single
+   node is the Verlet evaluation itself
+------------------------------------------------------------------------- */
+
+bool FixPEJump::replaced_forces_exact() const
+{
+  return (rule->size() == 1) && (auto_tol == 0.0);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool FixPEJump::can_reverse() const
+{
+  return true;
+}
+
+/* ---------------------------------------------------------------------- */
+
+std::string FixPEJump::instability_advice() const
+{
+  return fmt::format("The time step {} is beyond the stability limit (for masses m joined by "
+                     "springs of stiffness k in a chain, dt < sqrt(m/k); bond_style harmonic has "
+                     "k = 2K): reduce it{}",
+                     h_step, adapt ? "" : ", or use the adapt keyword");
 }
 
 /* ----------------------------------------------------------------------
@@ -1013,7 +1069,7 @@ int FixPEJump::detect_velocity_change()
   int global[2];
   MPI_Allreduce(local, global, 2, MPI_INT, MPI_MAX, world);
   if (!global[0]) return 0;
-  if (global[1]) return 2;
+  if (global[1] || !can_reverse()) return 2;
 
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;

@@ -113,6 +113,8 @@ class FixPEJump : public Fix {
   double h_step;      // step size used in the current step
   double stats[2];    // largest |v^{n+1/2}|^2, |[v]^n|^2 of the local atoms after the last step
   int stats_valid;    // stats describe the current state
+  double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
+  int ref_checks;     // steps that contributed to jump_ref
 
   double evals_step, evals_total;    // force evaluations (units of full ones)
   bigint cached_step;
@@ -145,11 +147,14 @@ class FixPEJump : public Fix {
   void jump_atom(int i, double h, const double *favg);
 
   // hooks for derived styles
-  virtual double kick_step(int) const;    // step size of the initial kick of an atom
-  virtual void store_start_node();        // Lobatto start-node forces at q^0
-  virtual double node_cost();             // evaluations a sampled node costs
-  virtual void check_lists();             // neighbor lists valid for this step's nodes
-  static constexpr int NGLOBAL = 6;       // values of the global restart state
+  virtual double kick_step(int) const;               // step size of the initial kick of an atom
+  virtual void store_start_node();                   // Lobatto start-node forces at q^0
+  virtual double node_cost();                        // evaluations a sampled node costs
+  virtual void check_lists();                        // neighbor lists valid for this step's nodes
+  virtual std::string instability_advice() const;    // what to do when unstable
+  virtual bool replaced_forces_exact() const;        // other fixes may set forces
+  virtual bool can_reverse() const;                  // a velocity reversal can be continued
+  static constexpr int NGLOBAL = 6;                  // values of the global restart state
 };
 
 }    // namespace LAMMPS_NS

@@ -27,16 +27,13 @@
 
 #include "fix_pe_jump_async.h"
 
-#include "angle.h"
 #include "atom.h"
-#include "bond.h"
 #include "comm.h"
-#include "dihedral.h"
 #include "error.h"
 #include "force.h"
 #include "group.h"
-#include "improper.h"
 #include "memory.h"
+#include "modify.h"
 #include "neighbor.h"
 #include "pair.h"
 #include "pe_jump_force_sampler.h"
@@ -81,7 +78,6 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     error->all(FLERR,
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
-  stability_hint = " (the fine step for the fast atoms) or K (the coarse step for the slow ones)";
   counts[0] = counts[1] = counts[2] = 0.0;
   split = new InteractionSplit(lmp, groupbit, finebit);
 
@@ -144,6 +140,15 @@ void FixPEJumpAsync::init()
                "Fix pe_jump/async cannot split {}_style hybrid (it keeps its own copies of the "
                "topology lists): use one {} style with several types",
                hybrid, hybrid);
+
+  // the interactions among atoms outside the fix group are evaluated only
+  // at coarse nodes, for the slow atoms: nothing else may integrate them
+  for (const auto &ifix : modify->get_fix_list())
+    if ((ifix != this) && ifix->time_integrate)
+      error->all(FLERR,
+                 "Fix pe_jump/async must be the only time integration fix (found fix {} {}): "
+                 "atoms outside its group are frozen scenery",
+                 ifix->id, ifix->style);
 
   // the fast group must be a non-empty part of the fix group
 
@@ -216,6 +221,35 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 double FixPEJumpAsync::kick_step(int i) const
 {
   return split->coarse(i) ? nfine * update->dt : update->dt;
+}
+
+/* ----------------------------------------------------------------------
+   slow atoms also feel the slow interactions, which other fixes do not see
+------------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::replaced_forces_exact() const
+{
+  return false;
+}
+
+/* ----------------------------------------------------------------------
+   inside a coarse step the slow atoms have no node velocity to reverse
+------------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::can_reverse() const
+{
+  return fine_index == 0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+std::string FixPEJumpAsync::instability_advice() const
+{
+  return fmt::format("The fine step {} (fast and mixed atoms), the coarse step {} (slow atoms), or "
+                     "their coupling at the interface, which has resonances (see the stability "
+                     "section of the fix pe_jump/async documentation), is unstable: reduce the "
+                     "time step or change K",
+                     h_step, nfine * h_step);
 }
 
 /* ----------------------------------------------------------------------
@@ -299,8 +333,9 @@ void FixPEJumpAsync::check_lists()
     // forces only at the primary node, which the Verlet loop checks itself:
     // only the magnitudes are needed, final_integrate() took them per clock
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
-    const double local[3] = {0.0, MAX(hf2 * stats[0], hs2 * stats_slow[0]),
-                             MAX(hf2 * stats[1], hs2 * stats_slow[1])};
+    const double local[5] = {0.0, MAX(hf2 * stats[0], hs2 * stats_slow[0]),
+                             MAX(hf2 * stats[1], hs2 * stats_slow[1]), MAX(stats[1], stats_slow[1]),
+                             MAX(stats[0], stats_slow[0])};
     finish_check(local);
   } else if (!coarse_end) {
     check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), 0.0, 0.0, coarse_step);

@@ -85,6 +85,9 @@ class FixPEJumpAsync : public FixPEJump {
   void store_start_node() override;
   double node_cost() override;
   void check_lists() override;
+  std::string instability_advice() const override;
+  bool replaced_forces_exact() const override;
+  bool can_reverse() const override;
 
   void find_slow();
   void coarse_quadrature_sum(double coarse_step);

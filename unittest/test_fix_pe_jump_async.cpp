@@ -418,6 +418,9 @@ TEST(PEJumpAsync, BadInputGivesClearErrors)
               ContainsRegex("the fast group has no atoms in the fix group"));
   EXPECT_THAT(error_of(with({"fix 1 one pe_jump/async 5 fast"}), "run 1"),
               ContainsRegex("1 atoms of the fast group are not in the fix group"));
+  EXPECT_THAT(
+      error_of(with({"group two id 2", "fix 1 one pe_jump/async 5 one", "fix 2 two nve"}), "run 1"),
+      ContainsRegex("must be the only time integration fix \\(found fix 2 nve\\)"));
   EXPECT_THAT(error_of(with({"fix 1 all pe_jump/async 5 fast", "run_style respa 2 2"}), "run 1"),
               ContainsRegex("does not support run_style respa"));
   EXPECT_THAT(error_of(with({"bond_style hybrid harmonic", "bond_coeff 1 harmonic 1 1",
@@ -488,7 +491,36 @@ TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected)
     }
     const std::string out = ::testing::internal::GetCapturedStdout();
     EXPECT_THAT(what, ContainsRegex("is unstable at step [0-9]+"));
-    EXPECT_THAT(what, ContainsRegex("or K \\(the coarse step"));
+    EXPECT_THAT(what, ContainsRegex("the coarse step 0.3 \\(slow atoms\\)"));
     EXPECT_THAT(out, ::testing::Not(ContainsRegex("[^a-z](nan|inf)[^a-z]")));
+  }
+}
+
+/* ----------------------------------------------------------------------
+   reversing all velocities continues backwards in time at a coarse node;
+   inside a coarse step, where the slow atoms have no node velocity, the
+   scheme restarts and says so
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, VelocityReversalAtCoarseNodesOnly)
+{
+  for (const int nsteps : {340, 333}) {    // K = 20: a coarse node, and inside a coarse step
+    Sim s(MPI_COMM_WORLD, false);
+    ::testing::internal::CaptureStdout();
+    chain(s);
+    s.cmds({"fix 1 chain pe_jump/async 20 fast quadrature lobatto 3", "timestep 5e-4", "thermo 0",
+            fmt::format("run {} post no", nsteps)});
+    for (int i = 0; i < s.lmp->atom->nlocal; ++i)
+      for (int k = 0; k < 3; ++k) s.lmp->atom->v[i][k] = -s.lmp->atom->v[i][k];
+    s.cmd(fmt::format("run {} post no", nsteps));
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    const double back = max_diff(chain_q(s), Q0);
+    if (nsteps == 340) {
+      EXPECT_THAT(out, ContainsRegex("all velocities were reversed"));
+      EXPECT_LT(back, 1e-11);
+    } else {
+      EXPECT_THAT(out, ContainsRegex("velocities were changed since the last run"));
+      EXPECT_GT(back, 1e-8);    // a new start: no exact return
+    }
   }
 }
