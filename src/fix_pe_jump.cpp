@@ -53,6 +53,22 @@ static constexpr int REF_STEPS = 1;             // steps that set the reference 
 static constexpr int ADAPT_SAMPLES = 64;        // trial steps between dtmax and dtmin
 static constexpr int ADAPT_BISECT = 40;         // bisections of the largest admissible step
 
+/* ----------------------------------------------------------------------
+   the two-step update of one atom: [v]^{n+1} = dtfm favg - [v]^n,
+   v^{n+3/2} = v^{n+1/2} + [v]^{n+1}, node velocity v^{n+1}
+------------------------------------------------------------------------- */
+
+static inline void two_step_jump(double dtfm, const double *favg, double *jump, double *vhalf,
+                                 double *v)
+{
+  for (int k = 0; k < 3; k++) {
+    const double newjump = dtfm * favg[k] - jump[k];
+    vhalf[k] += newjump;
+    jump[k] = newjump;
+    v[k] = vhalf[k] - 0.5 * jump[k];
+  }
+}
+
 /* ---------------------------------------------------------------------- */
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3, 1) {}
@@ -464,10 +480,14 @@ void FixPEJump::final_integrate()
   if (fhist1) std::swap(fhist1, fhist2);
 
   double vv = 0.0, jj = 0.0;    // largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2, for check_excursion()
+  const double *rmass = atom->rmass;
+  const int *type = atom->type;
+  const double kick = 2.0 * h_step * force->ftm2v;
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
-    jump_atom(i, h_step, favg[i]);
+    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
+    two_step_jump(dtfm, favg[i], jump[i], vhalf[i], atom->v[i]);
     for (int k = 0; k < 3; k++) {
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist1) fhist1[i][k] = favg[i][k];
@@ -492,12 +512,7 @@ void FixPEJump::jump_atom(int i, double h, const double *favg)
 {
   const double dtfm =
       2.0 * h * force->ftm2v * (atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]]);
-  for (int k = 0; k < 3; k++) {
-    const double newjump = dtfm * favg[k] - jump[i][k];
-    vhalf[i][k] += newjump;
-    jump[i][k] = newjump;
-    atom->v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-  }
+  two_step_jump(dtfm, favg, jump[i], vhalf[i], atom->v[i]);
 }
 
 /* ----------------------------------------------------------------------
@@ -845,12 +860,27 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
 
   // excursion^2, step length^2, jump displacement^2, |[v]|^2, |v^{n+1/2}|^2
   double local[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
-  if (primary_only && stats_valid) {
-    // only the magnitudes are needed: final_integrate() took them
+  if (stats_valid && !select) {
+    // the magnitudes were taken by final_integrate(); only the nodes'
+    // excursions are left, and none if the Verlet loop checks the only node
     local[1] = h_step * h_step * stats[0];
     local[2] = h_step * h_step * stats[1];
     local[3] = stats[1];
     local[4] = stats[0];
+    if (xhold) {
+      double worst = 0.0;
+      for (int i = 0; i < nlocal; i++) {
+        if (!(mask[i] & groupbit)) continue;
+        const double a0 = x[i][0] - xhold[i][0], a1 = x[i][1] - xhold[i][1],
+                     a2 = x[i][2] - xhold[i][2];
+        const double l0 = a0 + lo * vhalf[i][0], l1 = a1 + lo * vhalf[i][1],
+                     l2 = a2 + lo * vhalf[i][2];
+        const double h0 = a0 + hi * vhalf[i][0], h1 = a1 + hi * vhalf[i][1],
+                     h2 = a2 + hi * vhalf[i][2];
+        worst = MAX(worst, MAX(l0 * l0 + l1 * l1 + l2 * l2, h0 * h0 + h1 * h1 + h2 * h2));
+      }
+      local[0] = worst;
+    }
   } else {
     for (int i = 0; i < nlocal; i++) {
       if (!(mask[i] & groupbit)) continue;
