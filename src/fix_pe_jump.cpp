@@ -78,7 +78,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int compensate_default) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
     fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr),
-    fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), fnode(nullptr)
+    fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), fnode(nullptr), node_select(nullptr)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
@@ -249,6 +249,12 @@ int FixPEJump::setmask()
 
 void FixPEJump::init()
 {
+  // how often fixes look at the atoms at the end of a step
+  end_of_step_every.clear();
+  for (const auto &ifix : modify->get_fix_list())
+    if ((ifix != this) && (ifix->setmask() & END_OF_STEP))
+      end_of_step_every.push_back(MAX(ifix->nevery, 1));
+
   inverse_mass.assign(atom->ntypes + 1, 0.0);
   if (atom->mass)
     for (int t = 1; t <= atom->ntypes; t++)
@@ -340,17 +346,23 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   h_step = update->dt;
   if (compensate && (hlast2 > 0.0)) compensate_step_change();
   check_lists();
+  advance(rule->node[rule->primary()] * h_step);
+}
 
+/* ----------------------------------------------------------------------
+   free flight of the atoms of the group over time t
+------------------------------------------------------------------------- */
+
+void FixPEJump::advance(double t)
+{
   double **x = atom->x;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const double c = rule->node[rule->primary()] * h_step;
-
   for (int i = 0; i < nlocal; i++)
     if (mask[i] & groupbit) {
-      x[i][0] += c * vhalf[i][0];
-      x[i][1] += c * vhalf[i][1];
-      x[i][2] += c * vhalf[i][2];
+      x[i][0] += t * vhalf[i][0];
+      x[i][1] += t * vhalf[i][1];
+      x[i][2] += t * vhalf[i][2];
     }
 }
 
@@ -516,6 +528,20 @@ void FixPEJump::jump_atom(int i, double h, const double *favg)
 }
 
 /* ----------------------------------------------------------------------
+   true if anything looks at the atoms after this step: output, the end of
+   the run, or a fix acting at the end of this step
+------------------------------------------------------------------------- */
+
+bool FixPEJump::step_observed() const
+{
+  const bigint now = update->ntimestep;
+  if ((now == output->next) || (now == update->laststep)) return true;
+  for (const int every : end_of_step_every)
+    if (now % every == 0) return true;
+  return false;
+}
+
+/* ----------------------------------------------------------------------
    the atoms are at the node q^{n+1} but the last force evaluation was
    elsewhere: on steps that tally energy or virial evaluate everything
    once more at the node; on output steps bring the ghosts to the node
@@ -529,7 +555,7 @@ void FixPEJump::tally_at_node()
     sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
     if (nlocal) memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
     evals_step += 1.0;
-  } else if ((update->ntimestep == output->next) || modify->n_end_of_step) {
+  } else if (step_observed()) {
     comm->forward_comm();
   }
 }
@@ -683,7 +709,7 @@ void FixPEJump::quadrature_sum()
 
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
-  sample_nodes(first, p, h_step, -rule->node[p] * h_step, nullptr, fsum, nullptr);
+  sample_nodes(first, p, h_step, -rule->node[p] * h_step, node_select, fsum, nullptr);
 }
 
 /* ----------------------------------------------------------------------
@@ -731,7 +757,7 @@ void FixPEJump::auto_quadrature_sum()
       for (int k = 0; k < 3; k++) fsum[i][k] = 0.5 * (fstart[i][k] + fsample[i][k]);
   int used = 0;
   if (defect() > auto_tol) {
-    if (nall) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nall);
+    save_positions(nullptr);
     if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
 
     evaluate_at((c[2] - 1.0) * h, nullptr);
@@ -755,7 +781,7 @@ void FixPEJump::auto_quadrature_sum()
       }
       used = 2;
     }
-    if (nall) memcpy(&x[0][0], &xsave[0][0], 3 * sizeof(double) * nall);
+    restore_positions(nullptr);
     if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
   }
   ++auto_steps[used];
@@ -803,10 +829,9 @@ void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, c
   double **f = atom->f;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const int nall = nlocal + atom->nghost;
   const int last = rule->size() - 1;
 
-  if (nall) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nall);
+  save_positions(select);
   if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
 
   for (int node = first; node <= last; node++) {
@@ -823,8 +848,45 @@ void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, c
     }
   }
 
-  if (nall) memcpy(&x[0][0], &xsave[0][0], 3 * sizeof(double) * nall);
+  restore_positions(select);
   if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+}
+
+/* ----------------------------------------------------------------------
+   positions of the owned atoms that evaluate_at() moves, kept in xsave.
+   The ghosts are not restored: they are brought up to date by the forward
+   communication before their next use (the next force evaluation, and on
+   steps with output or end-of-step fixes, tally_at_node())
+------------------------------------------------------------------------- */
+
+void FixPEJump::save_positions(const int *select)
+{
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  if (!select) {
+    if (nlocal) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nlocal);
+    return;
+  }
+  for (int i = 0; i < nlocal; i++)
+    if ((mask[i] & groupbit) && select[i])
+      for (int k = 0; k < 3; k++) xsave[i][k] = x[i][k];
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::restore_positions(const int *select)
+{
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  if (!select) {
+    if (nlocal) memcpy(&x[0][0], &xsave[0][0], 3 * sizeof(double) * nlocal);
+    return;
+  }
+  for (int i = 0; i < nlocal; i++)
+    if ((mask[i] & groupbit) && select[i])
+      for (int k = 0; k < 3; k++) x[i][k] = xsave[i][k];
 }
 
 /* ---------------------------------------------------------------------- */
@@ -847,7 +909,7 @@ double FixPEJump::node_cost()
 ------------------------------------------------------------------------- */
 
 void FixPEJump::check_excursion(double lo, double hi, const int *select, double lo2, double hi2,
-                                double hsel)
+                                double hsel, const double *lag)
 {
   double **x = atom->x;
   const int *mask = atom->mask;
@@ -886,14 +948,15 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
       if (!(mask[i] & groupbit)) continue;
       const bool both = select && select[i];
       const double h = both ? hsel : h_step;
+      const double late = lag ? lag[i] : 0.0;
       double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
       for (int k = 0; k < 3; k++) {
         vv += vhalf[i][k] * vhalf[i][k];
         jj += jump[i][k] * jump[i][k];
         if (xhold) {
           const double a = x[i][k] - xhold[i][k];
-          const double ends[4] = {a + lo * vhalf[i][k], a + hi * vhalf[i][k], a + lo2 * vhalf[i][k],
-                                  a + hi2 * vhalf[i][k]};
+          const double ends[4] = {a + lo * vhalf[i][k], a + hi * vhalf[i][k],
+                                  a + (lo2 + late) * vhalf[i][k], a + (hi2 + late) * vhalf[i][k]};
           for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
         }
       }

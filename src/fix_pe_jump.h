@@ -78,8 +78,9 @@ class FixPEJump : public Fix {
   // quadrature auto: defect tolerance (energy), steps done with lobatto 3 and 5
   double auto_tol;
   bigint auto_steps[3];
-  double **fnode;    // work: forces at the middle node
-  char *id_pe;       // compute pe that requests the energy at every step
+  double **fnode;            // work: forces at the middle node
+  const int *node_select;    // if set: only these owned atoms move to the nodes
+  char *id_pe;               // compute pe that requests the energy at every step
   class Compute *c_pe;
   double vprev;    // potential energy at the start of the step
 
@@ -94,9 +95,10 @@ class FixPEJump : public Fix {
   // per-atom state, velocity units: free-flight velocity v^{n+1/2},
   // jump [v]^n, and (Lobatto rules) the sampled force at the start node
   double **vhalf, **jump, **fstart;
-  int nstate;                          // values per atom in exchange and restart buffers
-  std::string stability_hint;          // advice in the instability error
-  std::vector<double> inverse_mass;    // per atom type
+  int nstate;                            // values per atom in exchange and restart buffers
+  std::string stability_hint;            // advice in the instability error
+  std::vector<double> inverse_mass;      // per atom type
+  std::vector<int> end_of_step_every;    // intervals of the other fixes with end_of_step()
 
   // per-step work arrays (not migrated)
   double **fsum;       // quadrature sum of the forces over the step
@@ -125,12 +127,15 @@ class FixPEJump : public Fix {
   void quadrature_sum();
   void auto_quadrature_sum();
   void evaluate_at(double shift, const int *select);
+  void save_positions(const int *select);
+  void restore_positions(const int *select);
   void sample_nodes(int first, int skip, double scale, double offset, const int *select,
                     double **acc, double **fend);
   void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
-                       double hi2 = 0.0, double hsel = 0.0);
+                       double hi2 = 0.0, double hsel = 0.0, const double *lag = nullptr);
   void finish_check(const double *local);
   void tally_at_node();
+  bool step_observed() const;
   bool tally_step() const;
   void choose_next_dt();
   void compensate_step_change();
@@ -148,6 +153,7 @@ class FixPEJump : public Fix {
 
   // hooks for derived styles
   virtual double kick_step(int) const;               // step size of the initial kick of an atom
+  virtual void advance(double);                      // free flight to the primary node
   virtual void store_start_node();                   // Lobatto start-node forces at q^0
   virtual double node_cost();                        // evaluations a sampled node costs
   virtual void check_lists();                        // neighbor lists valid for this step's nodes

@@ -35,6 +35,7 @@
 #include "memory.h"
 #include "modify.h"
 #include "neighbor.h"
+#include "output.h"
 #include "pair.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_interaction_split.h"
@@ -56,8 +57,8 @@ static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, 0), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
-    reverse_labels(0), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr),
-    klass(nullptr), fcoarse(nullptr), nmax_coarse(0)
+    reverse_flags(nullptr), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr),
+    klass(nullptr), tlag(nullptr), fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -79,6 +80,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
   counts[0] = counts[1] = counts[2] = 0.0;
+  stats_slow[0] = stats_slow[1] = stats_interior[0] = stats_interior[1] = 0.0;
   split = new InteractionSplit(lmp, groupbit, finebit);
 
   size_vector = 9;
@@ -88,10 +90,11 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   size_peratom_cols = 0;
   peratom_freq = 1;
 
-  nstate += 4 + (rule->has_end_nodes() ? 3 : 0);
+  nstate += 5 + (rule->has_end_nodes() ? 3 : 0);
   FixPEJumpAsync::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) {
     klass[i] = OUTSIDE;
+    tlag[i] = 0.0;
     for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
   }
 }
@@ -104,6 +107,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
   memory->destroy(facc);
   memory->destroy(fstart_coarse);
   memory->destroy(klass);
+  memory->destroy(tlag);
   memory->destroy(fcoarse);
 }
 
@@ -187,6 +191,92 @@ void FixPEJumpAsync::post_neighbor()
   split->build();
   split_calls = neighbor->ncalls;
   find_slow();    // atoms are reordered only when the lists are rebuilt
+  find_moving();
+}
+
+/* ----------------------------------------------------------------------
+   atoms that move on fine steps: those on the fine clock and the slow ones
+   that take part in a fine interaction, here or as a ghost elsewhere. A
+   slow atom that joins a fine interaction inside a coarse step catches up
+   with its free flight first (and the ghosts are updated).
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::find_moving()
+{
+  split->mark_fine_participants(participant);
+  reverse_flags = &participant;
+  comm->reverse_comm(this, 1);
+  reverse_flags = nullptr;
+
+  const int nlocal = atom->nlocal;
+  moving.resize(nlocal);
+  int caught = 0;
+  for (int i = 0; i < nlocal; i++) {
+    moving[i] = !slow[i] || participant[i];
+    if (moving[i] && (tlag[i] != 0.0)) {
+      catch_up(i);
+      caught = 1;
+    }
+  }
+  int any = 0;
+  MPI_Allreduce(&caught, &any, 1, MPI_INT, MPI_MAX, world);
+  if (any) comm->forward_comm();
+
+  if (started) interior_magnitudes();
+}
+
+/* ----------------------------------------------------------------------
+   largest |v|^2 and |[v]|^2 of the atoms that final_integrate() passes over
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::interior_magnitudes()
+{
+  const int nlocal = atom->nlocal;
+  stats_interior[0] = stats_interior[1] = 0.0;
+  for (int i = 0; i < nlocal; i++) {
+    if (!(atom->mask[i] & groupbit) || moving[i]) continue;
+    double vv = 0.0, jj = 0.0;
+    for (int k = 0; k < 3; k++) {
+      vv += vhalf[i][k] * vhalf[i][k];
+      jj += jump[i][k] * jump[i][k];
+    }
+    stats_interior[0] = MAX(stats_interior[0], vv);
+    stats_interior[1] = MAX(stats_interior[1], jj);
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::catch_up(int i)
+{
+  double **x = atom->x;
+  for (int k = 0; k < 3; k++) x[i][k] += tlag[i] * vhalf[i][k];
+  tlag[i] = 0.0;
+}
+
+/* ----------------------------------------------------------------------
+   free flight to the primary node: moving atoms every fine step, the
+   others (interior slow atoms) only at the last fine step of a coarse step
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::advance(double t)
+{
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const bool coarse_end = (fine_index + 1 >= nfine);
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    if (!(moving[i] || coarse_end)) {
+      tlag[i] += t;
+      continue;
+    }
+    const double dt = tlag[i] + t;
+    x[i][0] += dt * vhalf[i][0];
+    x[i][1] += dt * vhalf[i][1];
+    x[i][2] += dt * vhalf[i][2];
+    tlag[i] = 0.0;
+  }
 }
 
 /* ---------------------------------------------------------------------- */
@@ -197,7 +287,9 @@ void FixPEJumpAsync::setup(int vflag)
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
   find_slow();
+  find_moving();
   FixPEJump::setup(vflag);
+  interior_magnitudes();
   label_classes();
 }
 
@@ -207,6 +299,8 @@ void FixPEJumpAsync::setup(int vflag)
 
 void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
+  for (int i = 0; i < atom->nlocal; i++)
+    if (tlag[i] != 0.0) catch_up(i);
   if (with_start) {
     fine_index = 0;
     elapsed = 0.0;
@@ -329,20 +423,37 @@ void FixPEJumpAsync::check_lists()
   const double c_hi = tally ? 1.0 : rule->node.back();
   const double coarse_step = nfine * h_step;
   const bool coarse_end = (fine_index + 1 >= nfine);
-  if (!coarse_end && !tally && (rule->size() == 1) && stats_valid) {
-    // forces only at the primary node, which the Verlet loop checks itself:
-    // only the magnitudes are needed, final_integrate() took them per clock
+  if (!coarse_end && stats_valid) {
+    // the magnitudes were taken per clock by final_integrate(); the fine
+    // nodes' excursions matter only for the atoms that move to them, and
+    // not at all if the Verlet loop checks the only node
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
-    const double local[5] = {0.0, MAX(hf2 * stats[0], hs2 * stats_slow[0]),
-                             MAX(hf2 * stats[1], hs2 * stats_slow[1]), MAX(stats[1], stats_slow[1]),
-                             MAX(stats[0], stats_slow[0])};
+    double local[5] = {0.0, MAX(hf2 * stats[0], hs2 * stats_slow[0]),
+                       MAX(hf2 * stats[1], hs2 * stats_slow[1]), MAX(stats[1], stats_slow[1]),
+                       MAX(stats[0], stats_slow[0])};
+    double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+    if (xhold && (tally || (rule->size() > 1))) {
+      double **x = atom->x;
+      const int *mask = atom->mask;
+      const double lo = c_lo * h_step, hi = c_hi * h_step;
+      for (int i = 0; i < atom->nlocal; i++) {
+        if (!(mask[i] & groupbit) || !moving[i]) continue;
+        double dlo = 0.0, dhi = 0.0;
+        for (int k = 0; k < 3; k++) {
+          const double a = x[i][k] - xhold[i][k];
+          dlo += (a + lo * vhalf[i][k]) * (a + lo * vhalf[i][k]);
+          dhi += (a + hi * vhalf[i][k]) * (a + hi * vhalf[i][k]);
+        }
+        local[0] = MAX(local[0], MAX(dlo, dhi));
+      }
+    }
     finish_check(local);
   } else if (!coarse_end) {
     check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), 0.0, 0.0, coarse_step);
   } else {
     const double span = elapsed + h_step;
     check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), c_lo * span - elapsed,
-                    rule->node.back() * span - elapsed, coarse_step);
+                    rule->node.back() * span - elapsed, coarse_step, tlag);
   }
 }
 
@@ -393,7 +504,9 @@ void FixPEJumpAsync::final_integrate()
   const bool direct = (rule->size() == 1) && !split_primary;
   if (!direct) {
     split->activate(InteractionSplit::FINE);
+    node_select = moving.data();
     quadrature_sum();
+    node_select = nullptr;
     split->restore();
   }
   double **favg = direct ? atom->f : fsum;
@@ -405,10 +518,24 @@ void FixPEJumpAsync::final_integrate()
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const int keep_start = rule->has_end_nodes();
 
-  double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};    // per clock: largest |v|^2, |[v]|^2
+  const bool other_forces = (modify->n_post_force_any > 0);
+  // per clock: largest |v|^2, |[v]|^2 (interior slow atoms change only at
+  // coarse nodes: their magnitudes are kept from there)
+  double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+  if (!coarse_end) {
+    mag[1][0] = stats_interior[0];
+    mag[1][1] = stats_interior[1];
+  }
+  double interior[2] = {0.0, 0.0};
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
-    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+    if (!(moving[i] || coarse_end)) {
+      tlag[i] += rest;
+      // no fine interaction and no other fix acts on it: nothing else changes
+      if (!other_forces) continue;
+    } else {
+      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+    }
     if (keep_start)
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
     if (!slow[i]) {
@@ -425,15 +552,31 @@ void FixPEJumpAsync::final_integrate()
       }
     }
     double *m = mag[slow[i]];
-    m[0] = MAX(m[0],
-               vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
-    m[1] = MAX(m[1], jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
+    const double vv =
+        vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2];
+    const double jj = jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2];
+    m[0] = MAX(m[0], vv);
+    m[1] = MAX(m[1], jj);
+    if (coarse_end && slow[i] && !moving[i]) {
+      interior[0] = MAX(interior[0], vv);
+      interior[1] = MAX(interior[1], jj);
+    }
+  }
+  if (coarse_end) {
+    stats_interior[0] = interior[0];
+    stats_interior[1] = interior[1];
   }
   for (int k = 0; k < 2; k++) {
     stats[k] = std::isfinite(mag[0][k]) ? mag[0][k] : BLOWUP;
     stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : BLOWUP;
   }
   stats_valid = 1;
+
+  // interior slow atoms catch up wherever their positions are looked at:
+  // output, other fixes at the end of the step, the end of the run
+  if (!coarse_end && step_observed())
+    for (int i = 0; i < nlocal; i++)
+      if (tlag[i] != 0.0) catch_up(i);
 
   tally_at_node();
   evals_total += evals_step;
@@ -459,9 +602,9 @@ void FixPEJumpAsync::label_classes()
 {
   comm->forward_comm();
   split->mark_interface(interface_flag);
-  reverse_labels = 1;
+  reverse_flags = &interface_flag;
   comm->reverse_comm(this, 1);
-  reverse_labels = 0;
+  reverse_flags = nullptr;
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
@@ -482,8 +625,8 @@ void FixPEJumpAsync::label_classes()
 
 int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
 {
-  if (!reverse_labels) return FixPEJump::pack_reverse_comm(n, first, buf);
-  for (int i = 0; i < n; i++) buf[i] = interface_flag[first + i];
+  if (!reverse_flags) return FixPEJump::pack_reverse_comm(n, first, buf);
+  for (int i = 0; i < n; i++) buf[i] = (*reverse_flags)[first + i];
   return n;
 }
 
@@ -491,12 +634,12 @@ int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
 
 void FixPEJumpAsync::unpack_reverse_comm(int n, int *list, double *buf)
 {
-  if (!reverse_labels) {
+  if (!reverse_flags) {
     FixPEJump::unpack_reverse_comm(n, list, buf);
     return;
   }
   for (int i = 0; i < n; i++)
-    if (buf[i] != 0.0) interface_flag[list[i]] = 1;
+    if (buf[i] != 0.0) (*reverse_flags)[list[i]] = 1;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -522,6 +665,7 @@ void FixPEJumpAsync::grow_arrays(int nmax)
   memory->grow(facc, nmax, 3, "pe_jump/async:facc");
   if (rule->has_end_nodes()) memory->grow(fstart_coarse, nmax, 3, "pe_jump/async:fstart_coarse");
   memory->grow(klass, nmax, "pe_jump/async:klass");
+  memory->grow(tlag, nmax, "pe_jump/async:tlag");
   vector_atom = klass;
 }
 
@@ -535,6 +679,7 @@ void FixPEJumpAsync::copy_arrays(int i, int j, int delflag)
     if (fstart_coarse) fstart_coarse[j][k] = fstart_coarse[i][k];
   }
   klass[j] = klass[i];
+  tlag[j] = tlag[i];
 }
 
 /* ---------------------------------------------------------------------- */
@@ -546,6 +691,7 @@ int FixPEJumpAsync::pack_exchange(int i, double *buf)
   if (fstart_coarse)
     for (int k = 0; k < 3; k++) buf[m++] = fstart_coarse[i][k];
   buf[m++] = klass[i];
+  buf[m++] = tlag[i];
   return m;
 }
 
@@ -558,6 +704,7 @@ int FixPEJumpAsync::unpack_exchange(int nlocal, double *buf)
   if (fstart_coarse)
     for (int k = 0; k < 3; k++) fstart_coarse[nlocal][k] = buf[m++];
   klass[nlocal] = buf[m++];
+  tlag[nlocal] = buf[m++];
   return m;
 }
 
@@ -603,7 +750,7 @@ void FixPEJumpAsync::restart(char *buf)
 double FixPEJumpAsync::memory_usage()
 {
   double bytes = FixPEJump::memory_usage();
-  bytes += (double) atom->nmax * sizeof(double) * (3 + (fstart_coarse ? 3 : 0) + 1);
+  bytes += (double) atom->nmax * sizeof(double) * (3 + (fstart_coarse ? 3 : 0) + 2);
   bytes += (double) nmax_coarse * 3 * sizeof(double);
   return bytes;
 }

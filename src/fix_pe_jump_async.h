@@ -58,14 +58,15 @@ class FixPEJumpAsync : public FixPEJump {
  protected:
   enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
 
-  int nfine;               // K: fine steps per coarse step
-  int finebit;             // group bit of the fast group
-  int fine_index;          // fine steps done in the current coarse step
-  double elapsed;          // time elapsed in the current coarse step
-  double counts[3];        // global number of slow, mixed, fast atoms
-  double stats_slow[2];    // largest |v|^2, |[v]|^2 of the local slow atoms
-  int reverse_labels;      // reverse communication carries interface flags
-  bigint split_calls;      // neighbor->ncalls when the interactions were split
+  int nfine;                          // K: fine steps per coarse step
+  int finebit;                        // group bit of the fast group
+  int fine_index;                     // fine steps done in the current coarse step
+  double elapsed;                     // time elapsed in the current coarse step
+  double counts[3];                   // global number of slow, mixed, fast atoms
+  double stats_slow[2];               // largest |v|^2, |[v]|^2 of the local slow atoms
+  double stats_interior[2];           // ... of those that do not move on fine steps
+  std::vector<int> *reverse_flags;    // reverse communication carries these flags
+  bigint split_calls;                 // neighbor->ncalls when the interactions were split
 
   PEJump::InteractionSplit *split;
 
@@ -74,22 +75,32 @@ class FixPEJumpAsync : public FixPEJump {
   // slow-interaction force at the coarse start node, and the class
   double **facc, **fstart_coarse;
   double *klass;
+  // per-atom time by which the position lags behind the free flight: slow
+  // atoms that take part in no fine interaction (interior ones) do not move
+  // on fine steps but catch up at the coarse node (or when they meet one)
+  double *tlag;
 
   double **fcoarse;    // work: coarse quadrature sum of the slow interactions
   int nmax_coarse;
   std::vector<int> slow;              // owned atoms: 1 if on the coarse clock
   std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
+  std::vector<int> moving;            // owned atoms: 1 if they move on fine steps
+  std::vector<int> participant;       // owned and ghost atoms: in a fine interaction
 
   void start_scheme(const char *, bool) override;
   double kick_step(int) const override;
   void store_start_node() override;
   double node_cost() override;
   void check_lists() override;
+  void advance(double) override;
   std::string instability_advice() const override;
   bool replaced_forces_exact() const override;
   bool can_reverse() const override;
 
   void find_slow();
+  void find_moving();
+  void interior_magnitudes();
+  void catch_up(int i);
   void coarse_quadrature_sum(double coarse_step);
   void label_classes();
 };

@@ -238,3 +238,24 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
     }
   }
 }
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::mark_fine_participants(std::vector<int> &flag) const
+{
+  flag.assign(atom->nlocal + atom->nghost, 0);
+  for (const auto &p : pairs) {
+    const auto &part = p.part[FINE];
+    for (int ii = 0; ii < p.list->inum; ii++) {
+      const int i = p.list->ilist[ii];
+      if (part.numneigh[i] == 0) continue;
+      flag[i] = 1;
+      for (int jj = 0; jj < part.numneigh[i]; jj++) flag[part.firstneigh[i][jj] & NEIGHMASK] = 1;
+    }
+  }
+  for (const auto &t : topo) {
+    if (!t.on) continue;
+    for (const int *entry : t.part[FINE])
+      for (int k = 0; k < t.natoms; k++) flag[entry[k]] = 1;
+  }
+}

@@ -60,6 +60,10 @@ namespace PEJump {
     // or a pair closer than the pair style's cutoff
     void mark_interface(std::vector<int> &flag) const;
 
+    // flag[i] = 1 for every atom i (owned or ghost) that takes part in an
+    // interaction of the FINE subset (a pair of its lists, a bond, ...)
+    void mark_fine_participants(std::vector<int> &flag) const;
+
    private:
     int groupbit, finebit;
     Subset current;
