@@ -53,22 +53,6 @@ static constexpr int REF_STEPS = 1;             // steps that set the reference 
 static constexpr int ADAPT_SAMPLES = 64;        // trial steps between dtmax and dtmin
 static constexpr int ADAPT_BISECT = 40;         // bisections of the largest admissible step
 
-/* ----------------------------------------------------------------------
-   the two-step update of one atom: [v]^{n+1} = dtfm favg - [v]^n,
-   v^{n+3/2} = v^{n+1/2} + [v]^{n+1}, node velocity v^{n+1}
-------------------------------------------------------------------------- */
-
-static inline void two_step_jump(double dtfm, const double *favg, double *jump, double *vhalf,
-                                 double *v)
-{
-  for (int k = 0; k < 3; k++) {
-    const double newjump = dtfm * favg[k] - jump[k];
-    vhalf[k] += newjump;
-    jump[k] = newjump;
-    v[k] = vhalf[k] - 0.5 * jump[k];
-  }
-}
-
 /* ---------------------------------------------------------------------- */
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3, 1) {}

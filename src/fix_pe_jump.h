@@ -151,6 +151,18 @@ class FixPEJump : public Fix {
   // v^{n+3/2} = v^{n+1/2} + [v]^{n+1}, node velocity v^{n+1}
   void jump_atom(int i, double h, const double *favg);
 
+  // the same for the arrays of one atom, with dtfm = 2 h ftm2v / m
+  static inline void two_step_jump(double dtfm, const double *favg, double *jmp, double *vh,
+                                   double *v)
+  {
+    for (int k = 0; k < 3; k++) {
+      const double newjump = dtfm * favg[k] - jmp[k];
+      vh[k] += newjump;
+      jmp[k] = newjump;
+      v[k] = vh[k] - 0.5 * jmp[k];
+    }
+  }
+
   // hooks for derived styles
   virtual double kick_step(int) const;               // step size of the initial kick of an atom
   virtual void advance(double);                      // free flight to the primary node

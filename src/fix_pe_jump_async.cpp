@@ -519,6 +519,10 @@ void FixPEJumpAsync::final_integrate()
   const int keep_start = rule->has_end_nodes();
 
   const bool other_forces = (modify->n_post_force_any > 0);
+  const double *rmass = atom->rmass;
+  const int *type = atom->type;
+  double **v = atom->v;
+  const double kick = 2.0 * h_step * force->ftm2v;
   // per clock: largest |v|^2, |[v]|^2 (interior slow atoms change only at
   // coarse nodes: their magnitudes are kept from there)
   double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
@@ -539,7 +543,8 @@ void FixPEJumpAsync::final_integrate()
     if (keep_start)
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
     if (!slow[i]) {
-      jump_atom(i, h_step, favg[i]);
+      const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
+      two_step_jump(dtfm, favg[i], jump[i], vhalf[i], v[i]);
     } else {
       for (int k = 0; k < 3; k++) facc[i][k] += h_step * favg[i][k];
       if (coarse_end) {
