@@ -368,8 +368,7 @@ void FixPEJumpAsync::store_start_node()
   split->activate(InteractionSplit::COARSE);
   sampler->compute(ForceSampler::ALL, 0, 0);
   for (int i = 0; i < nlocal; i++)
-    if (split->coarse(i))
-      for (int k = 0; k < 3; k++) fstart_coarse[i][k] = f[i][k];
+    for (int k = 0; k < 3; k++) fstart_coarse[i][k] = split->coarse(i) ? f[i][k] : 0.0;
 
   split->restore();
   if (nlocal) memcpy(&f[0][0], &fsave[0][0], nbytes);
