@@ -1,0 +1,846 @@
+#!/usr/bin/python3
+"""Write doc/benchmarks.md and doc/bench_*.png from bench/results/<mode>/.
+
+    /usr/bin/python3 bench/report.py [--quick]
+"""
+
+import argparse
+import math
+import os
+import sys
+
+import numpy as np
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchlib as B  # noqa: E402
+
+DOC = os.path.join(B.ROOT, "doc")
+
+
+def fmt(x, d=3):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "n/a"
+    if x == 0:
+        return "0"
+    if abs(x) >= 1e4 or abs(x) < 1e-3:
+        return f"{x:.{d-1}e}"
+    return f"{x:.{d}g}"
+
+
+def met(ok):
+    return "**met**" if ok else "**missed**"
+
+
+def interp_cost(points, err, key):
+    """Cost (points[key]) of a curve at error err, log-log interpolation
+    between the bracketing points (extrapolated from the nearest two if
+    err is outside the curve; flagged)."""
+    pts = sorted(((p["err"], p[key]) for p in points if p["err"] > 0), key=lambda t: t[0])
+    if len(pts) < 2:
+        return None, True
+    le = np.log([p[0] for p in pts])
+    lc = np.log([p[1] for p in pts])
+    x = math.log(err)
+    if x < le[0]:
+        i, extra = 0, True
+    elif x > le[-1]:
+        i, extra = len(pts) - 2, True
+    else:
+        i = max(0, min(len(pts) - 2, int(np.searchsorted(le, x)) - 1))
+        extra = False
+    if le[i + 1] == le[i]:
+        return float(np.exp(lc[i])), extra
+    t = (x - le[i]) / (le[i + 1] - le[i])
+    return float(np.exp(lc[i] + t * (lc[i + 1] - lc[i]))), extra
+
+
+def groups(points):
+    out = {}
+    for p in points:
+        out.setdefault(p["label"], []).append(p)
+    for v in out.values():
+        v.sort(key=lambda p: p["h"])
+    return out
+
+
+STYLE = {}
+
+
+def style(label):
+    if label not in STYLE:
+        markers = "osD^v<>pPX*hd"
+        n = len(STYLE)
+        cmap = plt.get_cmap("tab20")
+        STYLE[label] = dict(marker=markers[n % len(markers)], color=cmap((2 * n) % 20 + (n // 10) % 2),
+                            linestyle=["-", "--", ":"][(n // 10) % 3], markersize=5)
+    return STYLE[label]
+
+
+def wp_plot(name, title, points, xkeys=("evals", "loop_time"), ekey="err", elabel="error",
+            extra_panel=None, note=None):
+    STYLE.clear()
+    g = groups(points)
+    npan = len(xkeys) + (1 if extra_panel else 0)
+    fig, axs = plt.subplots(1, npan, figsize=(5.2 * npan, 4.4))
+    axs = np.atleast_1d(axs)
+    xl = {"evals": "force evaluations (1 = one full evaluation)", "loop_time": "wall time of the run [s] (median)"}
+    for ax, xk in zip(axs, xkeys):
+        for lab, ps in g.items():
+            xs = [p[xk] for p in ps]
+            ys = [p[ekey] for p in ps]
+            ax.loglog(xs, ys, label=lab, **style(lab))
+        ax.set_xlabel(xl.get(xk, xk))
+        ax.set_ylabel(elabel)
+        ax.grid(True, which="both", alpha=0.3)
+    if extra_panel:
+        ax = axs[-1]
+        k2, lab2 = extra_panel
+        for lab, ps in g.items():
+            xs = [p["evals"] for p in ps]
+            ys = [max(p[k2], 1e-16) for p in ps]
+            ax.loglog(xs, ys, label=lab, **style(lab))
+        ax.set_xlabel(xl["evals"])
+        ax.set_ylabel(lab2)
+        ax.grid(True, which="both", alpha=0.3)
+    axs[0].legend(fontsize=7, loc="best")
+    fig.suptitle(title, fontsize=10)
+    if note:
+        fig.text(0.01, 0.01, note, fontsize=7)
+    fig.tight_layout(rect=(0, 0.03, 1, 0.95))
+    path = os.path.join(DOC, f"bench_{name}.png")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return f"bench_{name}.png"
+
+
+def wp_table(points, cols):
+    head = "| " + " | ".join(c[0] for c in cols) + " |\n|" + "---|" * len(cols) + "\n"
+    rows = []
+    for p in sorted(points, key=lambda p: (p["label"], -p["h"])):
+        rows.append("| " + " | ".join(c[1](p) for c in cols) + " |")
+    return head + "\n".join(rows) + "\n"
+
+
+def quiet_text(d):
+    q = d.get("quiet", [])
+    if not q:
+        return ""
+    return ", ".join(f"{x['label']}: others {x['others_busy_cores']:.2f} cores" for x in q)
+
+
+def cpu_range(points):
+    c = [p["cpu_use"] for p in points if p.get("cpu_use") == p.get("cpu_use")]
+    return (min(c), max(c)) if c else (float("nan"), float("nan"))
+
+
+# ===================================================================== sections
+
+def sec_lj_cost(R, targets, misses):
+    d = R.get("lj_cost")
+    if not d:
+        return ""
+    t = {x["name"]: x for x in d["table"]}
+    nve = t["fix nve"]
+    out = ["## 1. Per-step cost on the LJ liquid\n"]
+    if d.get("rerun_of_noisy"):
+        out.append("The first measurement of this stage was noisy; these are the numbers of its repetition by "
+                   "the `retime` stage.\n")
+    out.append(f"{nve['natoms']} atoms (fcc 0.8442, {d['ncell']}^3 cells), `lj/cut 2.5`, T = 1.44 on the lattice, "
+               f"`neighbor 0.3 bin`, `neigh_modify every 1 delay 0 check yes`, dt = 0.005, {d['steps']} steps, "
+               f"thermo output at the first and last step only (`bench/inputs/in.lj`). Every configuration ran "
+               f"{d['reps']} times, interleaved (all configurations once, then again), and the table shows medians of "
+               f"the LAMMPS `Loop time`. Force evaluations are the fix's vector element 5 over the run "
+               f"(fix nve: one per step). The last step of a Legendre rule (and midpoint) costs one extra "
+               f"evaluation for the energy output; that is in the counts. The force evaluations a fix does itself at the extra "
+               f"quadrature nodes are booked by LAMMPS under Modify, not Pair. Machine state: {quiet_text(d)}.\n")
+    out.append("| integrator | evals / step | loop time [s] | ratio to fix nve | target | | Pair [s] | Neigh [s] | Comm [s] | Modify [s] | Other [s] | CPU use |")
+    out.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for row in d["table"]:
+        ratio = row["loop_time"] / nve["loop_time"]
+        q = row["quad"] or ""
+        tgt, ok = "", None
+        if q == "midpoint":
+            tgt = "<= 1.05"
+            ok = ratio <= 1.05
+        elif q.startswith("lobatto"):
+            n = int(q.split()[1])
+            tgt = f"<= {1.05 * (n - 1):.2f}"
+            ok = ratio <= 1.05 * (n - 1)
+        elif q.startswith("legendre"):
+            n = int(q.split()[1])
+            tgt = f"(N = {n}: {1.05 * n:.2f})"
+        bd = row["breakdown"]
+        out.append(f"| {row['name']} | {row['evals'] / row['steps']:.4f} | {row['loop_time']:.3f} | {ratio:.3f} | {tgt} | "
+                   f"{'' if ok is None else met(ok)} | {bd.get('Pair', 0):.3f} | {bd.get('Neigh', 0):.3f} | {bd.get('Comm', 0):.3f} | "
+                   f"{bd.get('Modify', 0):.3f} | {bd.get('Other', 0):.3f} | {row['cpu_use']:.1f}% |")
+        if ok is not None:
+            targets.append((f"LJ liquid ({nve['natoms']} atoms): {row['name']} per step vs fix nve",
+                            tgt, f"{ratio:.3f} (wall), {row['evals'] / row['steps'] / 1.0:.3f} evals/step", ok))
+            if not ok:
+                misses.append(row["name"])
+    out.append("")
+    # explain the split
+    mid = t.get("pe_jump midpoint")
+    if mid:
+        dm = mid["breakdown"].get("Modify", 0) - nve["breakdown"].get("Modify", 0)
+        dp = mid["breakdown"].get("Pair", 0) - nve["breakdown"].get("Pair", 0)
+        dn = mid["breakdown"].get("Neigh", 0) - nve["breakdown"].get("Neigh", 0)
+        tot = mid["loop_time"] - nve["loop_time"]
+        out.append(f"Where the midpoint rule's extra time goes (medians, pe_jump midpoint minus fix nve): "
+                   f"total {tot:+.3f} s = Modify {dm:+.3f} s + Pair {dp:+.3f} s + Neigh {dn:+.3f} s + rest. "
+                   f"Modify is the integrator itself: fix nve {nve['breakdown'].get('Modify', 0):.3f} s, "
+                   f"pe_jump midpoint {mid['breakdown'].get('Modify', 0):.3f} s, i.e. "
+                   f"{1e9 * mid['breakdown'].get('Modify', 0) / mid['steps'] / mid['natoms']:.1f} ns per atom and step "
+                   f"against {1e9 * nve['breakdown'].get('Modify', 0) / nve['steps'] / nve['natoms']:.1f} ns. "
+                   f"The midpoint rule does {mid['evals'] - mid['steps']:.0f} extra evaluation(s) in {mid['steps']} "
+                   f"steps (energy and virial at the last step, for the thermo output), "
+                   f"{100.0 * (mid['evals'] - mid['steps']) / mid['steps']:.1f}% of the force work. "
+                   f"Neighbor list builds: fix nve {nve.get('neigh_builds')}, pe_jump midpoint {mid.get('neigh_builds')}.\n")
+    return "\n".join(out) + "\n"
+
+
+def sec_mpi(R):
+    d = R.get("mpi")
+    if not d:
+        return ""
+    out = ["## 2. MPI: 1 and 2 ranks on the 2 cores\n"]
+    if d.get("rerun_of_noisy"):
+        out.append("The first measurement of this stage ran while other processes used the machine "
+                   f"({quiet_text({'quiet': d['first_attempt_quiet']})}); the `retime` stage repeated it at the end "
+                   "and these are the numbers of the repetition.\n")
+    out.append(f"Same LJ input, {d['steps']} steps, {d['reps']} interleaved repetitions, medians. Memory: "
+               f"LAMMPS' `Per MPI rank memory allocation` (average over ranks) times the number of ranks, "
+               f"per atom; and the peak resident set of each rank process (`/usr/bin/time`, includes the "
+               f"executable, MPI and libraries). Machine state: {quiet_text(d)}.\n")
+    out.append("| integrator | ranks | loop time [s] | speedup 1 -> 2 | LAMMPS memory [bytes/atom] | peak RSS per rank [MB] | final pe | CPU use |")
+    out.append("|---|---|---|---|---|---|---|---|")
+    t = {(x["integ"], x["quad"], x["np"]): x for x in d["table"]}
+    for x in d["table"]:
+        one = t.get((x["integ"], x["quad"], 1))
+        sp = one["loop_time"] / x["loop_time"] if one else float("nan")
+        rss = x.get("rank_rss_kb") or ([x["maxrss_kb"]] if x.get("maxrss_kb") else [])
+        name = "fix nve" if x["integ"] == "nve" else f"pe_jump {x['quad']}"
+        out.append(f"| {name} | {x['np']} | {x['loop_time']:.3f} | {sp:.2f} | {x['bytes_per_atom']:.0f} | "
+                   f"{', '.join(f'{r / 1024:.0f}' for r in rss)} | {x['final_pe']:.10g} | {x['cpu_use']:.1f}% |")
+    out.append("")
+    n1 = t.get(("nve", None, 1))
+    m1 = t.get(("pe_jump", "midpoint", 1))
+    l1 = t.get(("pe_jump", "lobatto 3", 1))
+    if n1 and m1 and l1:
+        agree = []
+        for (i, q) in (("nve", None), ("pe_jump", "midpoint"), ("pe_jump", "lobatto 3")):
+            a, b = t.get((i, q, 1)), t.get((i, q, 2))
+            if a and b:
+                agree.append(abs(a["final_pe"] - b["final_pe"]) / abs(a["final_pe"]))
+        out.append(f"The fix's own per-atom state shows in the memory: pe_jump midpoint needs "
+                   f"{m1['bytes_per_atom'] - n1['bytes_per_atom']:.0f} bytes/atom more than fix nve, lobatto 3 "
+                   f"{l1['bytes_per_atom'] - n1['bytes_per_atom']:.0f} (it also keeps the start-node force). "
+                   f"The final potential energy after {d['steps']} steps is the same on 1 and 2 ranks to a relative "
+                   f"{max(agree):.1e} (thermo output with 14 significant digits).\n")
+    return "\n".join(out) + "\n"
+
+
+def sec_fpu(R):
+    d = R.get("fpu")
+    if not d:
+        return ""
+    pts = d["points"]
+    png = wp_plot("fpu", f"FPU chain (omega = {d['omega']:g}), positions at t = {d['T']:g} vs DOP853 reference",
+                  pts, extra_panel=("eHt", "max |H~ - H~0|/|H0| (fix nve, respa: H)"),
+                  elabel="max |q - q_ref|")
+    out = ["## 3. Work-precision: Fermi-Pasta-Ulam chain\n"]
+    out.append(f"The chain of `examples/fpu` (Hairer-Lubich-Wanner; 6 moving masses between walls, alternating "
+               f"soft quartic springs and stiff harmonic springs, omega = {d['omega']:g}, their initial values). "
+               f"For `run_style respa` the stiff springs must be a different force style from the soft ones: "
+               f"every integrator here runs `bench/inputs/in.springs`, where the stiff springs are bonds "
+               f"(`bond_style harmonic`) and the soft ones a `pair_style table` (spline, 20000 points) of "
+               f"(r - a)^4 between the neighbours that are not bonded; respa puts bonds on the inner level. "
+               f"Error: max over the atoms of |q_i(T) - q_i,ref(T)|, T = {d['T']:g}, against scipy's DOP853 "
+               f"(rtol 1e-13) on the exact quartic model (so the table's interpolation error is inside the "
+               f"error floor). Third panel: conservation of the pseudo-energy H~ (fix pe_jump) or of H "
+               f"(fix nve, respa), max over 50 samples. pe_jump/async is not applicable: every moving atom "
+               f"touches a stiff spring, so there are no slow atoms. Wall times of a 8-atom system are "
+               f"LAMMPS' per-step overhead, not force work. {d['reps']} repetitions, medians.\n")
+    out.append(f"![FPU work-precision]({png})\n")
+    out.append(wp_table(pts, [("method", lambda p: p["label"]), ("h", lambda p: f"{p['h']:g}"),
+                              ("evals", lambda p: f"{p['evals']:.0f}"), ("wall [s]", lambda p: f"{p['loop_time']:.4f}"),
+                              ("max position error", lambda p: fmt(p["err"])),
+                              ("max rel. dH", lambda p: fmt(p["eH"])), ("max rel. dH~", lambda p: fmt(p["eHt"]))]))
+    return "\n".join(out) + "\n"
+
+
+def sec_string(R):
+    d = R.get("string")
+    if not d:
+        return ""
+    pts = d["points"]
+    png = wp_plot("string", "Nonlinear string (alpha 0.99, A 0.3), positions at t = 1 vs reference",
+                  pts, extra_panel=("eHt", "max |H~ - H~0|/|H~0| (fix nve: H)"), elabel="max |q - q_ref|")
+    out = ["## 4. Work-precision: nonlinear string\n"]
+    out.append(f"`bench/inputs/in.string` = the setup of `examples/nonlinear-string` (alpha = 0.99, amplitude 0.3, "
+               f"101 nodes) with a choice of integrator. Reference: pe_jump legendre 5 at h = {d['href']:g} "
+               f"(its own error, estimated from the run at 2h by Richardson, is {fmt(d['ref_err'])}). Error: max "
+               f"over the nodes of the distance to the reference at t = 1. One force style only (bonds): "
+               f"`run_style respa` cannot split it; the string is homogeneous: no slow/fast split for "
+               f"pe_jump/async. {d['reps']} repetitions, medians; 101 atoms, so wall times are per-step overhead.\n")
+    out.append(f"![string work-precision]({png})\n")
+    out.append(wp_table(pts, [("method", lambda p: p["label"]), ("h", lambda p: f"{p['h']:g}"),
+                              ("evals", lambda p: f"{p['evals']:.0f}"), ("wall [s]", lambda p: f"{p['loop_time']:.4f}"),
+                              ("max position error", lambda p: fmt(p["err"])),
+                              ("max rel. dH", lambda p: fmt(p["eH"])), ("max rel. dH~", lambda p: fmt(p["eHt"]))]))
+    return "\n".join(out) + "\n"
+
+
+def async_overhead_rows(pts, sync_label, async_prefix):
+    """(label, h, eval ratio, wall ratio, wall/eval) of async against sync
+    (same quadrature when the async label names one) at the same fine step."""
+    g = groups(pts)
+    rows = []
+    for lab, ps in g.items():
+        if not lab.startswith(async_prefix):
+            continue
+        q = [k for k in g if k.startswith("pe_jump ") and lab.endswith(k[len("pe_jump "):])]
+        sync = {p["h"]: p for p in g.get(q[0] if q else sync_label, [])}
+        for p in ps:
+            s = sync.get(p["h"])
+            if not s:
+                continue
+            er = p["evals"] / s["evals"]
+            wr = p["loop_time"] / s["loop_time"]
+            rows.append((lab, p["h"], er, wr, wr / er))
+    return rows
+
+
+def sec_chain(R, targets):
+    d = R.get("chain")
+    if not d:
+        return ""
+    pts = d["points"]
+    c = d["counts"]
+    png = wp_plot("chain", f"Slow/fast chain: {c['atoms']} atoms ({d['copies']} copies), positions at t = {d['T']:g}",
+                  pts, elabel="max |q - q_ref|")
+    out = ["## 5. Work-precision: slow/fast chain, " + f"{c['atoms']} atoms\n"]
+    out.append(f"The chain of paper section 4.3.1 (`examples/fpu-slow-fast`): 3 stiff harmonic springs "
+               f"(wall - q1 - q2 - q3), then 4 soft quartic springs (q3 - q4 - ... - wall); q1, q2 fast, q3 mixed, "
+               f"q4..q6 slow. **Choice: {d['copies']} copies of the paper's chain side by side** (2d, copies "
+               f"apart in y beyond the cutoff), {c['atoms']} atoms of which {c['mobile']} move, {c['bonds']} stiff "
+               f"bonds and {c['soft']} soft pair springs. Copies rather than one long chain because (i) the "
+               f"slow/fast structure per atom, hence the cost ratio N_a/N_s of the paper, stays the paper's, "
+               f"(ii) the reference can then be computed exactly: the copies cycle through {d['variants']} random "
+               f"initial states (fast displacements q1..q3 uniform in +-0.2 sqrt(10)/omega, slow velocities "
+               f"p4..p6 uniform in +-0.5: the energies of the paper's example), each integrated by DOP853 at "
+               f"rtol 1e-13. **Stiffness: omega^2 = {d['omega2']:g}** instead of the paper's 10: with omega^2 = 10 "
+               f"the 'fast' frequencies (1.0, 2.8, 4.0) are no faster than the quartic springs' (about 1-3 at "
+               f"these amplitudes), so there is nothing for a multirate method to gain; omega = 50 (as in the "
+               f"FPU chain) separates the time scales by about 30. Stiff springs are bonds, soft springs a pair "
+               f"table (as in section 3), so respa can put the stiff springs on the inner level. Error: max over "
+               f"all moving atoms of |q - q_ref| at t = {d['T']:g}. The respa force-evaluation count is "
+               f"(K x bonds + pairs)/(bonds + pairs) per outer step. {d['reps']} repetitions, medians.\n")
+    out.append(f"![chain work-precision]({png})\n")
+    out.append(wp_table(pts, [("method", lambda p: p["label"]), ("h (fine)", lambda p: f"{p['h']:g}"),
+                              ("evals", lambda p: f"{p['evals']:.0f}"), ("wall [s]", lambda p: f"{p['loop_time']:.3f}"),
+                              ("error", lambda p: fmt(p["err"])), ("error fast atoms", lambda p: fmt(p["err_fast"])),
+                              ("error slow atoms", lambda p: fmt(p["err_slow"])),
+                              ("max rel. dH~ (async: at coarse nodes)", lambda p: fmt(p["eHt"])),
+                              ("Modify [s]", lambda p: f"{p['breakdown'].get('Modify', 0):.3f}"),
+                              ("CPU", lambda p: f"{p['cpu_use']:.0f}%")]))
+    # target: at equal error async faster than nve and respa
+    g = groups(pts)
+    lines = ["\nAt equal error (log-log interpolation of the other curve's wall time at the async point's error; "
+             "'extrap.' = outside that curve's range):\n",
+             "| async point | error | wall [s] | fix nve at that error [s] | best respa at that error [s] | speedup vs nve | vs respa |",
+             "|---|---|---|---|---|---|---|"]
+    best = None
+    for lab, ps in g.items():
+        if not lab.startswith("async"):
+            continue
+        for p in ps:
+            tn, xn = interp_cost(g["fix nve"], p["err"], "loop_time")
+            rs = [(interp_cost(v, p["err"], "loop_time"), k) for k, v in g.items() if k.startswith("respa")]
+            rs = [(x[0][0], x[0][1], x[1]) for x in rs if x[0][0]]
+            tr, xr, kr = min(rs) if rs else (None, True, "")
+            sn, sr = tn / p["loop_time"], tr / p["loop_time"] if tr else float("nan")
+            lines.append(f"| {lab}, h = {p['h']:g} | {fmt(p['err'])} | {p['loop_time']:.3f} | {tn:.3f}{' extrap.' if xn else ''} | "
+                         f"{tr:.3f} ({kr}){' extrap.' if xr else ''} | {sn:.2f} | {sr:.2f} |")
+            score = min(sn, sr)
+            if best is None or score > best[0]:
+                best = (score, lab, p["h"], sn, sr)
+    out.append("\n".join(lines) + "\n")
+    if best:
+        ok = best[3] > 1 and best[4] > 1
+        targets.append(("Slow/fast chain: async faster than fix nve and respa at equal error",
+                        "> 1 and > 1", f"best: {best[1]} h={best[2]:g}: {best[3]:.2f}x vs nve, {best[4]:.2f}x vs respa", ok))
+    rows = async_overhead_rows(pts, "pe_jump midpoint", "async")
+    if rows:
+        out.append("Async against sync (pe_jump midpoint) at the same fine step: force-evaluation ratio, "
+                   "wall-clock ratio, and their quotient (target: within 10% of 1):\n")
+        out.append("The paper's cost ratio for this chain is eta = (1 + m/((m+1)K))/(1 + m/(m+1)), m = 3; the measured "
+                   "evaluation ratio also holds the sync run's extra energy evaluations at its thermo output.\n")
+        out.append("| async | h | evals async/sync | paper's eta | wall async/sync | wall ratio / evals ratio |\n|---|---|---|---|---|---|")
+        for r in rows:
+            K = int(r[0].split("K=")[1].split()[0])
+            eta = (1 + 3.0 / (4 * K)) / (1 + 3.0 / 4)
+            out.append(f"| {r[0]} | {r[1]:g} | {r[2]:.3f} | {eta:.3f} | {r[3]:.3f} | {r[4]:.2f} |")
+        out.append("")
+        k = [r for r in rows if r[0] == "async K=10"]
+        if k:
+            worst = max(k, key=lambda r: abs(r[4] - 1))
+            targets.append(("Slow/fast chain: async K=10 wall-clock ratio to sync within 10% of its evaluation ratio",
+                            "0.9 .. 1.1", f"{worst[4]:.2f} (evals {worst[2]:.3f}, wall {worst[3]:.3f})",
+                            abs(worst[4] - 1) <= 0.1))
+    return "\n".join(out) + "\n"
+
+
+def sec_wave(R, targets):
+    d = R.get("wave")
+    if not d:
+        return ""
+    pts = d["points"]
+    for p in pts:
+        p["label_h"] = p["label"]
+    png = wp_plot("wave", f"Inhomogeneous wave: max error against the exact solution at t = {d['T']:g} (N = "
+                  + ", ".join(str(n) for n in sorted({p['N'] for p in pts})) + ")", pts,
+                  elabel="max_i |u_i - u(x_i, T)|", extra_panel=("eH", "max |H - H0|/|H0| (samples)"))
+    out = ["## 6. Work-precision: inhomogeneous wave against the exact solution\n"]
+    out.append("Paper section 4.3.2 (`examples/wave-inhomogeneous`): c = 10 on (0, 0.5), 1 on (0.5, 1), N "
+               "intervals, u0 = 0.01 exp(-(20(x-0.2))^2), v0 = -c1 u0' (design.md section 4: the paper's printed "
+               "v0 is inconsistent with its exact solution). The stiff springs (c1) are bonds, the soft ones (c2) a "
+               "pair table (`in.springs`), so that respa can split them. Each curve refines N (and the steps with "
+               "dx); the stable async pair of design.md, h_S = 0.5 dx, h_F = 0.05 dx (K = 10), and h_S = 0.5 dx, "
+               "h_F = 0.1 dx (K = 5). The error against the exact solution contains the space discretisation "
+               "error, which dominates at these N (the same for all integrators at the same N); the cost to reach "
+               f"it is what differs. {d['reps']} repetitions, medians. Right panel: energy H = pe + ke (sampled at "
+               "5 times; for async at coarse nodes).\n")
+    out.append(f"![wave work-precision]({png})\n")
+    out.append(wp_table(pts, [("method", lambda p: p["label"]), ("N", lambda p: str(p["N"])),
+                              ("evals", lambda p: f"{p['evals']:.0f}"), ("wall [s]", lambda p: f"{p['loop_time']:.4f}"),
+                              ("error vs exact", lambda p: fmt(p["err"], 4)),
+                              ("max rel. dH", lambda p: fmt(p["eH"])), ("max rel. dH~", lambda p: fmt(p["eHt"]))]))
+    # async vs sync at the same N and fine step
+    g = {}
+    for p in pts:
+        g[(p["label"], p["N"])] = p
+    rows = []
+    for p in pts:
+        if p["label"].startswith("async K=10"):
+            s = g.get(("pe_jump h=0.05dx", p["N"]))
+            if s:
+                rows.append((p["N"], p["evals"] / s["evals"], p["loop_time"] / s["loop_time"], p["err"] / s["err"]))
+    if rows:
+        out.append("Async K = 10 (0.5 dx / 0.05 dx) against pe_jump at h = 0.05 dx, same N:\n")
+        out.append("| N | evals async/sync | wall async/sync | wall ratio / evals ratio | error async/sync |\n|---|---|---|---|---|")
+        for r in rows:
+            out.append(f"| {r[0]} | {r[1]:.3f} | {r[2]:.3f} | {r[2] / r[1]:.2f} | {r[3]:.3f} |")
+        out.append("")
+        big = max(rows, key=lambda r: r[0])
+        targets.append((f"Wave N={big[0]}: async K=10 wall-clock ratio to sync within 10% of its evaluation ratio",
+                        "0.9 .. 1.1", f"{big[2] / big[1]:.2f} (evals {big[1]:.3f}, wall {big[2]:.3f})",
+                        abs(big[2] / big[1] - 1) <= 0.1))
+    return "\n".join(out) + "\n"
+
+
+def sec_lattice(R, targets, misses):
+    d = R.get("lattice")
+    if not d:
+        return ""
+    pts = d["points"]
+    info = d["info"]
+    png = wp_plot("lattice", f"Spring lattice, {info['atoms']} atoms, stiff inclusion {info['inclusion']} atoms "
+                  f"(stiffness x{d['stiffness_ratio']:g}), positions at t = {d['T']:g}", pts, elabel="max |r - r_ref|")
+    out = ["## 7. Work-precision: 2d spring lattice with a stiff inclusion (K = 50)\n"]
+    out.append(f"Triangular lattice (spacing 1, periodic, unit masses), {info['atoms']} atoms; a central disk of "
+               f"{info['inclusion']} atoms ({100.0 * info['inclusion'] / info['atoms']:.1f}%) is the fast group. Springs "
+               f"between two inclusion atoms are {d['stiffness_ratio']:g} times stiffer (frequency ratio "
+               f"{math.sqrt(d['stiffness_ratio']):.0f}): {info['bonds']} bonds; all other nearest-neighbour springs "
+               f"({info['soft']}) are the soft pair table. Initial state: lattice positions, Gaussian velocities "
+               f"with kT = 1e-4 in every atom (equipartition: every mode equally excited). With K = "
+               f"{math.sqrt(d['stiffness_ratio']):.0f} = the frequency ratio, omega h is the same in both regions, so the "
+               f"async error is about the sync error (see the inclusion/matrix columns). Reference: pe_jump midpoint "
+               f"at h = {d['href']:g} (Richardson estimate of its error {fmt(d['ref_err'])}). Error: max over atoms of "
+               f"|r - r_ref| at t = {d['T']:g}. {d['reps']} repetitions, medians. This scene is `bench/inputs/in.springs` "
+               f"on a data file from `benchlib.write_lattice_data` (not `examples/spring-lattice`, which did not "
+               f"exist when this was written, and whose springs are all bonds so respa could not split them).\n")
+    out.append(f"![lattice work-precision]({png})\n")
+    out.append(wp_table(pts, [("method", lambda p: p["label"]), ("h (fine)", lambda p: f"{p['h']:g}"),
+                              ("evals", lambda p: f"{p['evals']:.1f}"), ("wall [s]", lambda p: f"{p['loop_time']:.3f}"),
+                              ("error", lambda p: fmt(p["err"])), ("inclusion", lambda p: fmt(p["err_inclusion"])),
+                              ("matrix", lambda p: fmt(p["err_matrix"])), ("max rel. dH~", lambda p: fmt(p["eHt"])),
+                              ("Pair [s]", lambda p: f"{p['breakdown'].get('Pair', 0):.3f}"),
+                              ("Bond [s]", lambda p: f"{p['breakdown'].get('Bond', 0):.3f}"),
+                              ("Modify [s]", lambda p: f"{p['breakdown'].get('Modify', 0):.3f}"),
+                              ("Comm [s]", lambda p: f"{p['breakdown'].get('Comm', 0):.3f}"),
+                              ("CPU", lambda p: f"{p['cpu_use']:.0f}%")]))
+    g = groups(pts)
+    sync = g.get("pe_jump midpoint (sync)", [])
+    lines = ["\nAsync K = 50 against sync at the same accuracy (sync's wall time and evaluations interpolated "
+             "log-log at the async point's error):\n",
+             "| async K=50 h_F | error | evals | wall [s] | sync evals at that error | sync wall at that error [s] | speedup (evals) | speedup (wall) |",
+             "|---|---|---|---|---|---|---|---|"]
+    res = []
+    for p in g.get("async K=50", []):
+        ts, xs = interp_cost(sync, p["err"], "loop_time")
+        es, _ = interp_cost(sync, p["err"], "evals")
+        res.append((p, ts, es, xs))
+        lines.append(f"| {p['h']:g} | {fmt(p['err'])} | {p['evals']:.1f} | {p['loop_time']:.3f} | {es:.1f} | "
+                     f"{ts:.3f}{' extrap.' if xs else ''} | {es / p['evals']:.2f} | {ts / p['loop_time']:.2f} |")
+    out.append("\n".join(lines) + "\n")
+    if res:
+        bestw = max(r[1] / r[0]["loop_time"] for r in res)
+        beste = max(r[2] / r[0]["evals"] for r in res)
+        ok = bestw >= 5
+        targets.append((f"Lattice, {100.0 * info['inclusion'] / info['atoms']:.0f}% stiff inclusion, K=50: async faster than sync at the same accuracy",
+                        ">= 5x (wall)", f"{bestw:.2f}x wall, {beste:.2f}x evals", ok))
+        if not ok:
+            misses.append("lattice async")
+    rows = async_overhead_rows(pts, "pe_jump midpoint (sync)", "async")
+    if rows:
+        out.append("Async against sync at the same fine step (target: wall ratio within 10% of evaluation ratio):\n")
+        out.append("| async | h_F | evals async/sync | wall async/sync | wall ratio / evals ratio |\n|---|---|---|---|---|")
+        for r in rows:
+            out.append(f"| {r[0]} | {r[1]:g} | {r[2]:.3f} | {r[3]:.3f} | {r[4]:.2f} |")
+        out.append("")
+        k50 = [r for r in rows if r[0] == "async K=50"]
+        if k50:
+            worst = max(k50, key=lambda r: abs(r[4] - 1))
+            targets.append(("Lattice: async K=50 wall-clock ratio to sync within 10% of its evaluation ratio",
+                            "0.9 .. 1.1", f"{worst[4]:.2f} (evals {worst[2]:.3f}, wall {worst[3]:.3f})",
+                            abs(worst[4] - 1) <= 0.1))
+            if abs(worst[4] - 1) > 0.1:
+                misses.append("async overhead")
+    return "\n".join(out) + "\n"
+
+
+def sec_lj_wp(R):
+    d = R.get("lj_wp")
+    if not d:
+        return ""
+    pts = d["points"]
+    n = pts[0]["natoms"]
+    png = wp_plot("lj", f"LJ liquid, {n} atoms: positions at t = {d['T']:g} vs reference", pts,
+                  elabel="max |r - r_ref|")
+    out = ["## 8. Work-precision: LJ liquid\n"]
+    out.append(f"The liquid of section 1 ({n} atoms) after 1000 steps from the lattice (written with "
+               f"`write_data`), then t = {d['T']:g} with each integrator. Reference: fix nve at h = {d['href']:g} "
+               f"(Richardson estimate of its error {fmt(d['ref_err'])}). Error: max over atoms of the distance of "
+               f"the unwrapped positions. The liquid is chaotic, so errors are amplified by about exp(lambda t) "
+               f"alike for every method; `lj/cut` without smoothing has a force jump at the cutoff. One force "
+               f"style: no respa split, no slow/fast split. {d['reps']} repetitions, medians.\n")
+    out.append(f"![LJ work-precision]({png})\n")
+    out.append(wp_table(pts, [("method", lambda p: p["label"]), ("h", lambda p: f"{p['h']:g}"),
+                              ("evals", lambda p: f"{p['evals']:.0f}"), ("wall [s]", lambda p: f"{p['loop_time']:.3f}"),
+                              ("max position error", lambda p: fmt(p["err"])),
+                              ("rel. change of etotal", lambda p: fmt(p["eH"]))]))
+    g = groups(pts)
+    nv = {p["h"]: p for p in g.get("fix nve", [])}
+    ratios = [(lab, p["h"], p["err"] / nv[p["h"]]["err"]) for lab, ps in g.items() if lab != "fix nve"
+              for p in ps if p["h"] in nv]
+    if ratios:
+        out.append("Error relative to fix nve at the same step: " +
+                   "; ".join(f"{lab} h={h:g}: {r:.2f}" for lab, h, r in ratios) + ".\n")
+    return "\n".join(out) + "\n"
+
+
+def sec_dtreset(R):
+    d = R.get("dtreset")
+    if not d:
+        return ""
+    out = ["## 9. Variable steps: fix dt/reset\n"]
+    out.append("Both integrators must see exactly the same step sequence. Each input therefore holds two "
+               "identical, non-interacting copies of the system, one integrated by fix nve and one by fix pe_jump, "
+               "and a single `fix dt/reset` (computed from the atoms of one copy, 'driver') sets the step of both. "
+               "FPU: `bench/inputs/in.dtreset-fpu` (omega = 50, `fix dt/reset 1 NULL 2e-3 1.5e-3 units box`); LJ: "
+               "`bench/inputs/in.dtreset-lj` (shifted lj/cut so that the energy is continuous, copies overlap "
+               "with `neigh_modify exclude type 1 2`, 1000 steps of fix nve at dt = 0.005 first, then "
+               "`fix dt/reset 1 NULL 0.008 0.015 units box`). H = pe + ke of each copy, H~ = pe + f_ID of the "
+               "pe_jump copy, all relative to |H(0)|.\n")
+    keys = [k for k in d if k.startswith("fpu")] + (["lj"] if "lj" in d else [])
+    fig, axs = plt.subplots(2, len(keys), figsize=(4.6 * len(keys), 6.4), squeeze=False)
+    rows = ["| system | dt/reset driver | pe_jump rule | steps | dt range | fix nve: H(end) - H(0) | fix nve: max abs | pe_jump: H(end) - H(0) | pe_jump: max abs | pe_jump: H~(end) - H~(0) | H~: max abs |",
+            "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for j, k in enumerate(keys):
+        v = d[k]
+        a = np.array(v["data"])
+        t, dt = a[:, 1], a[:, 2]
+        H1, H2, Ht = a[:, 3], a[:, 4], a[:, 5]
+        s = abs(H1[0])
+        e1, e2, et = (H1 - H1[0]) / s, (H2 - H2[0]) / s, (Ht - Ht[0]) / s
+        ax = axs[0, j]
+        ax.plot(t, e1, label="fix nve: H")
+        ax.plot(t, e2, label="pe_jump: H")
+        ax.plot(t, et, label="pe_jump: H~")
+        ax.set_title(f"{'FPU' if k.startswith('fpu') else 'LJ liquid'}: driver {v['drive']}, pe_jump {v['quad']}", fontsize=9)
+        ax.set_xlabel("time")
+        ax.set_ylabel("(E - E(0))/|H(0)|")
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+        axs[1, j].plot(t, dt, lw=0.6)
+        axs[1, j].set_xlabel("time")
+        axs[1, j].set_ylabel("dt (every 100th step)")
+        axs[1, j].grid(alpha=0.3)
+        rows.append(f"| {'FPU chain' if k.startswith('fpu') else 'LJ liquid'} | {v['drive']} | {v['quad']} | {int(a[-1, 0])} | "
+                    f"{dt.min():.3g} .. {dt.max():.3g} | {fmt(e1[-1])} | {fmt(np.max(np.abs(e1)))} | {fmt(e2[-1])} | "
+                    f"{fmt(np.max(np.abs(e2)))} | {fmt(et[-1])} | {fmt(np.max(np.abs(et)))} |")
+    fig.tight_layout()
+    fig.savefig(os.path.join(DOC, "bench_dtreset.png"), dpi=110)
+    plt.close(fig)
+    out.append("\n".join(rows) + "\n")
+    out.append("![energy under fix dt/reset](bench_dtreset.png)\n")
+    summ = []
+    for k in keys:
+        v = d[k]
+        a = np.array(v["data"])
+        s0 = abs(a[0, 3])
+        e1 = np.max(np.abs(a[:, 3] - a[0, 3])) / s0
+        e2 = np.max(np.abs(a[:, 4] - a[0, 4])) / s0
+        et = np.max(np.abs(a[:, 5] - a[0, 5])) / s0
+        summ.append(f"{'FPU' if k.startswith('fpu') else 'LJ'} (driver {v['drive']}, {v['quad']}): fix nve's H "
+                    f"{e1:.2g}, pe_jump's H {e2:.2g}, its H~ {et:.2g}")
+    out.append("Largest relative excursion over the run, " + "; ".join(summ) + ". H of pe_jump differs from "
+               "H~ by the jump energy, which oscillates with the step changes but does not accumulate; H~ is "
+               "conserved up to the quadrature error of the rule (exact for lobatto 3 on the quartic FPU chain).\n")
+    return "\n".join(out) + "\n"
+
+
+def sec_profile(R):
+    d = R.get("profile")
+    if not d or d.get("skipped"):
+        return ""
+    out = ["## 10. Profiles\n"]
+    out.append("`perf record` of single runs (whole process, setup included): LJ 100 steps, 32000 atoms; "
+               "lattice (section 7) h = 0.002 to t = 8, async K = 50; chain (section 5, 100000 atoms) h = 0.002 "
+               "to t = 2, async K = 10. Self time per symbol, symbols above 1%:\n")
+    for k, rows in d.items():
+        if k.endswith("_loop") or not isinstance(rows, list):
+            continue
+        lt = d.get(k + "_loop")
+        out.append(f"**{k}**" + (f" (loop {lt:.2f} s)" if lt else "") + ": " +
+                   "; ".join(f"{pct:.1f}% `{sym}`" for pct, sym in rows[:12]) + "\n")
+    return "\n".join(out) + "\n"
+
+
+def per_atom_ns(p, keys, natoms=None):
+    n = natoms or p["natoms"]
+    return 1e9 * sum(p["breakdown"].get(k, 0.0) for k in keys) / (p["steps"] * n)
+
+
+def sec_findings(R):
+    """Observations computed from the results: overhead of the fixes per
+    atom and step, async overhead, respa energy, LJ error constant, memory."""
+    out = ["## 11. Findings: where the time goes, and what looks wrong\n"]
+    # A: per-step overhead of pe_jump midpoint against fix nve, all scenes
+    rows = []
+    if "lj_cost" in R:
+        t = {x["name"]: x for x in R["lj_cost"]["table"]}
+        n, m = t["fix nve"], t.get("pe_jump midpoint")
+        if m:
+            rows.append(("LJ liquid", n["natoms"], n, m, n["natoms"]))
+    for scene, key, lab_s, hsel in (("lattice", "lattice", "pe_jump midpoint (sync)", 0.002),
+                                    ("slow/fast chain", "chain", "pe_jump midpoint", 0.002)):
+        if key in R:
+            g = groups(R[key]["points"])
+            n = [p for p in g.get("fix nve", []) if abs(p["h"] - hsel) < 1e-12]
+            m = [p for p in g.get(lab_s, []) if abs(p["h"] - hsel) < 1e-12]
+            if n and m:
+                nat = R[key]["counts"]["mobile"] if key == "chain" else n[0]["natoms"]
+                rows.append((scene, n[0]["natoms"], n[0], m[0], nat))
+    if "wave" in R:
+        pts = R["wave"]["points"]
+        N = max(p["N"] for p in pts)
+        n = [p for p in pts if p["N"] == N and p["label"] == "fix nve h=0.1dx"]
+        m = [p for p in pts if p["N"] == N and p["label"] == "pe_jump h=0.1dx"]
+        if n and m:
+            rows.append((f"wave N={N}", n[0]["natoms"], n[0], m[0], n[0]["natoms"]))
+    if rows:
+        out.append("**Per-step overhead of fix pe_jump (midpoint) against fix nve at the same step.** "
+                   "Force work = (Pair + Bond + Neigh) time per atom and step of fix nve; Modify = the "
+                   "integrator's own time per integrated atom and step. The extra work of the fix is a "
+                   "fixed cost per atom, so its relative weight depends on how cheap the force field is:\n")
+        out.append("| scene | atoms | force work, fix nve [ns/atom/step] | Modify fix nve [ns/atom/step] | Modify pe_jump [ns/atom/step] | wall pe_jump / fix nve |")
+        out.append("|---|---|---|---|---|---|")
+        for scene, nat, n, m, nint in rows:
+            fw = per_atom_ns(n, ("Pair", "Bond", "Neigh"))
+            out.append(f"| {scene} | {nat} | {fw:.1f} | {per_atom_ns(n, ('Modify',), nint):.1f} | "
+                       f"{per_atom_ns(m, ('Modify',), nint):.1f} | {m['loop_time'] / n['loop_time']:.2f} |")
+        out.append("\nOn the LJ liquid the force work is large and the midpoint target holds; on spring "
+                   "networks (a few tens of ns of force work per atom) the same per-atom cost of the fix "
+                   "makes `fix pe_jump` slower per step than `fix nve`, although it does the same number of "
+                   "force evaluations.\n")
+    # B: async overhead
+    lines, ratios = [], []
+    for key, lab_s, lab_a in (("lattice", "pe_jump midpoint (sync)", "async K=50"),
+                              ("chain", "pe_jump midpoint", "async K=10")):
+        if key not in R:
+            continue
+        g = groups(R[key]["points"])
+        for a in g.get(lab_a, []):
+            s = [p for p in g.get(lab_s, []) if p["h"] == a["h"]]
+            n = [p for p in g.get("fix nve", []) if p["h"] == a["h"]]
+            rs = [p for k, v in g.items() if k.startswith("respa") and k.endswith(lab_a.split()[-1])
+                  for p in v if p["h"] == a["h"]]
+            if not (s and n):
+                continue
+            s, n = s[0], n[0]
+            frac = (R[key]["info"]["inclusion"] / R[key]["info"]["atoms"]) if key == "lattice" else 0.5
+            ratios.append((key, lab_a, a["h"], a["breakdown"].get("Modify", 0) / a["steps"] / (s["breakdown"].get("Modify", 0) / s["steps"]),
+                           a["breakdown"].get("Modify", 0) / a["steps"] / (n["breakdown"].get("Modify", 0) / n["steps"]), frac))
+            lines.append(f"| {key} | {lab_a}, h_F = {a['h']:g} | {a['evals'] / s['evals']:.3f} | "
+                         f"{a['loop_time'] / s['loop_time']:.3f} | {1e3 * a['breakdown'].get('Modify', 0) / a['steps']:.3f} | "
+                         f"{1e3 * s['breakdown'].get('Modify', 0) / s['steps']:.3f} | {1e3 * n['breakdown'].get('Modify', 0) / n['steps']:.3f} | "
+                         f"{(1e3 * rs[0]['breakdown'].get('Modify', 0) / (rs[0]['steps'] * rs[0]['K'])) if rs else float('nan'):.3f} | "
+                         f"{1e3 * (a['breakdown'].get('Pair', 0) + a['breakdown'].get('Bond', 0)) / a['steps']:.3f} |")
+    if lines:
+        out.append("**Overhead of fix pe_jump/async per fine step.** Modify time per fine step of async, "
+                   "sync (pe_jump midpoint at h_F) and fix nve (at h_F), per inner step of respa with the same "
+                   "K (its Modify holds the inner-level fix nve updates of all atoms), and the force time (Pair "
+                   "+ Bond) of async per fine step. In ms:\n")
+        out.append("| scene | async | evals async/sync | wall async/sync | Modify async | Modify sync | Modify fix nve | Modify respa (per inner step) | Pair+Bond async |")
+        out.append("|---|---|---|---|---|---|---|---|---|")
+        out += lines
+        txt = "; ".join(f"{k} ({la}): {r1:.2f}x the Modify time of a synchronous step and {r2:.2f}x that of "
+                        f"fix nve (both integrate all atoms), with {100 * fr:.0f}% of the integrated atoms in the fast group"
+                        for k, la, h, r1, r2, fr in ratios if h == max(x[2] for x in ratios if x[0] == k))
+        out.append("\nThe force work of async (Pair + Bond) drops with its evaluation count, but its own "
+                   f"time per fine step (Modify) does not: {txt}. Its loops "
+                   "(`FixPEJumpAsync::final_integrate`, `FixPEJumpAsync::advance`, see the profiles) run over "
+                   "every atom of the group at every fine step, and LAMMPS' own neighbor-list check "
+                   "(`Neighbor::check_distance`) and force clearing also touch every atom, so the wall-clock "
+                   "gain stays far below the evaluation gain. respa updates all atoms at every inner step too, but at the cost "
+                   "of fix nve. Bringing the per-fine-step work down to the fast and mixed atoms (and the "
+                   "slow atoms that share an interaction with them) is what the async target needs.\n")
+    prof = R.get("profile", {})
+    for k in ("chain_async", "lattice_async"):
+        if prof.get(k):
+            out.append(f"Profile `{k}` (perf, self time, top symbols): " +
+                       "; ".join(f"{pct:.1f}% `{sym}`" for pct, sym in prof[k][:10]) + ".\n")
+    # C: respa energy on the wave
+    if "wave" in R:
+        pts = R["wave"]["points"]
+        rr = [p for p in pts if p["label"].startswith("respa")]
+        nv = [p for p in pts if p["label"].startswith("fix nve")]
+        if rr and nv:
+            out.append(f"**run_style respa on the wave does not conserve energy**: max |H - H0|/|H0| = "
+                       f"{min(p['eH'] for p in rr):.3g} .. {max(p['eH'] for p in rr):.3g} for every N and both K, "
+                       f"against {max(p['eH'] for p in nv):.2g} for fix nve and {max(p['eHt'] for p in pts if p['label'].startswith('async')):.2g} "
+                       f"for the pseudo-energy of pe_jump/async (checked independently from the final positions "
+                       f"and velocities). The outer (soft) impulses kick the stiff region every h_S = 0.5 dx, "
+                       f"i.e. omega_fast h_S = 10, deep in the resonance range of impulse multiple time "
+                       f"stepping; the positions' max error is not affected at t = 0.5.\n")
+    # D: LJ error constant
+    if "lj_wp" in R:
+        g = groups(R["lj_wp"]["points"])
+        nv = {p["h"]: p for p in g.get("fix nve", [])}
+        rat = {lab: np.median([p["err"] / nv[p["h"]]["err"] for p in ps if p["h"] in nv])
+               for lab, ps in g.items() if lab != "fix nve"}
+        if rat:
+            out.append("**LJ liquid: position error of pe_jump against fix nve at the same step** (median over "
+                       "the steps): " + ", ".join(f"{lab} {r:.2f}x" for lab, r in rat.items()) +
+                       ". Lobatto 2 (the trapezoidal rule) with the half-kick start is velocity Verlet, and "
+                       "reproduces it; the midpoint rule has a larger error constant on this scene, so at equal "
+                       "accuracy it needs a smaller step than fix nve. On the spring networks (sections 5-7) "
+                       "the errors of pe_jump midpoint and fix nve are equal.\n")
+    # auto TOL: per-step defect bound accumulates
+    for key in ("fpu", "string"):
+        if key in R:
+            g = groups(R[key]["points"])
+            au = [lab for lab in g if lab.startswith("pe_jump auto")]
+            for lab in au:
+                ps = g[lab]
+                tol = float(lab.split()[-1])
+                out.append(f"**quadrature auto on the {'FPU chain' if key == 'fpu' else 'nonlinear string'}** ({lab}): "
+                           "the pseudo-energy error over the run grows as the step shrinks, "
+                           + ", ".join(f"h = {p['h']:g}: {p['eHt']:.2g} after {p['steps']:.0f} steps"
+                                       for p in sorted(ps, key=lambda p: -p['h'])) +
+                           f": TOL = {tol:g} bounds the defect of each step, so the drift over a run is up to TOL "
+                           "times the number of steps; a user who wants a bound on the run must scale TOL with h.\n")
+    # E: memory
+    if "mpi" in R:
+        t = {(x["integ"], x["quad"], x["np"]): x for x in R["mpi"]["table"]}
+        n1, m1 = t.get(("nve", None, 1)), t.get(("pe_jump", "midpoint", 1))
+        if n1 and m1:
+            out.append(f"**Memory**: on {n1['natoms']} LJ atoms, 1 rank, LAMMPS reports {n1['memory_mb'][1]:.2f} MB for "
+                       f"fix nve and {m1['memory_mb'][1]:.2f} MB for pe_jump midpoint: "
+                       f"{m1['bytes_per_atom'] - n1['bytes_per_atom']:.0f} bytes per atom more "
+                       f"({(m1['bytes_per_atom'] - n1['bytes_per_atom']) / 8:.0f} doubles per owned atom). "
+                       f"`FixPEJump::memory_usage()` counts 2 per-atom arrays (free-flight velocity, jump) and 4 "
+                       f"work arrays (fsum, fsample, xsave, fsave) of 3 doubles, all sized to atom->nmax (owned + "
+                       f"ghost atoms); with the midpoint rule there are no extra nodes, so xsave and fsave are "
+                       f"not needed.\n")
+    return "\n".join(out) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args()
+    mode = "quick" if args.quick else "full"
+    rd = os.path.join(B.BENCH, "results", mode)
+    global DOC
+    if args.quick:
+        # the quick check must not overwrite the report of the full run
+        DOC = os.path.join(rd, "report")
+        os.makedirs(DOC, exist_ok=True)
+    R = {}
+    for f in os.listdir(rd):
+        if f.endswith(".json"):
+            R[f[:-5]] = B.load_json(os.path.join(rd, f))
+    targets, misses = [], []
+    body = []
+    body.append(sec_lj_cost(R, targets, misses))
+    body.append(sec_mpi(R))
+    body.append(sec_fpu(R))
+    body.append(sec_string(R))
+    body.append(sec_chain(R, targets))
+    body.append(sec_wave(R, targets))
+    body.append(sec_lattice(R, targets, misses))
+    body.append(sec_lj_wp(R))
+    body.append(sec_dtreset(R))
+    body.append(sec_profile(R))
+    body.append(sec_findings(R))
+    meta = R.get("meta", {})
+    head = ["# PE-JUMP benchmarks\n"]
+    if mode == "quick":
+        head.append("> **Quick mode** (`bench/run_all.sh --quick`): smaller systems, fewer steps and repetitions. "
+                    "The numbers below check the pipeline; the targets refer to the full run, whose report is "
+                    "`doc/benchmarks.md`.\n")
+    head.append("Generated by `bash bench/run_all.sh` (see `bench/README.md`) from the results in "
+                f"`bench/results/{mode}/`; every number and plot below comes from that run. LAMMPS 4 Feb 2025 "
+                "with fix pe_jump and fix pe_jump/async (`build/lmp`), one MPI rank unless stated, on a 2-core "
+                f"machine ({meta.get('uname', '')}). Wall times are LAMMPS' `Loop time` (the run, without setup), "
+                "medians of repeated runs made in one invocation of the script, interleaved so that the machine's "
+                "state affects all configurations alike. Force evaluations are the noise-free cost: vector "
+                "element 5 of the fixes (1 = one full force evaluation; fix nve does 1 per step). Each section "
+                "names the load of the other processes measured before and after it (from /proc/stat while none "
+                "of our runs was active) and the tables give LAMMPS' `% CPU use` of the runs: 100% means the run "
+                "had a core to itself.\n")
+    b = meta.get("binary", {})
+    if b:
+        head.append(f"Binary: a copy of `build/lmp` and its `liblammps.so.0` built {b.get('mtime')} (git HEAD "
+                    f"{meta.get('git_head', '?')}{'; src/ had uncommitted changes' if meta.get('git_src_dirty') else ''}), "
+                    "taken at the start so that a rebuild during the run cannot mix binaries.\n")
+    stages = meta.get("stages", {})
+    bins = {v.get("binary_mtime") for v in stages.values() if v.get("binary_mtime")}
+    if len(bins) > 1:
+        head.append("**Warning: the stages below were run with different binaries** (" +
+                    ", ".join(f"{k}: {v.get('binary_mtime')}" for k, v in stages.items()) + ").\n")
+    if stages:
+        head.append("Stage run times: " + ", ".join(f"{k} {v['seconds']:.0f} s" for k, v in stages.items()) + ".\n")
+    head.append("## Targets\n")
+    head.append("| target | required | measured | |\n|---|---|---|---|")
+    for name, req, meas, ok in targets:
+        head.append(f"| {name} | {req} | {meas} | {met(ok)} |")
+    head.append("")
+    text = "\n".join(head) + "\n" + "\n".join(b for b in body if b)
+    extra = os.path.join(B.BENCH, f"notes_{mode}.md")
+    if os.path.exists(extra):
+        with open(extra) as f:
+            text += "\n" + f.read()
+    with open(os.path.join(DOC, "benchmarks.md"), "w") as f:
+        f.write(text)
+    print("wrote", os.path.join(DOC, "benchmarks.md"))
+
+
+if __name__ == "__main__":
+    main()
