@@ -49,7 +49,6 @@ static constexpr double ADAPT_SAFETY = 0.5;     // aim at this fraction of the b
 static constexpr double BLOWUP = 1.0e300;       // stands for a non-finite value in reductions
 static constexpr double STOP_GROWTH = 1.0e6;    // jump growth that is always instability
 static constexpr double HINT_GROWTH = 2.0;      // ... that is instability if atoms move far
-static constexpr int REF_STEPS = 1;             // steps that set the reference jump magnitude
 static constexpr int ADAPT_SAMPLES = 64;        // trial steps between dtmax and dtmin
 static constexpr int ADAPT_BISECT = 40;         // bisections of the largest admissible step
 
@@ -60,9 +59,9 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 /* ---------------------------------------------------------------------- */
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int compensate_default) :
-    Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), vhalf(nullptr), jump(nullptr),
-    fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr),
-    fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), fnode(nullptr), node_select(nullptr)
+    Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), fnode(nullptr), node_select(nullptr),
+    fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), vhalf(nullptr), jump(nullptr),
+    fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
@@ -185,7 +184,6 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int c
   stats_valid = 0;
   stats[0] = stats[1] = 0.0;
   jump_ref = 0.0;
-  ref_checks = 0;
   evals_step = evals_total = 0.0;
   energy_scale = 0.0;
   cached_step = -1;
@@ -289,7 +287,6 @@ void FixPEJump::setup(int /*vflag*/)
   grow_work();
   stats_valid = 0;
   jump_ref = 0.0;
-  ref_checks = 0;
   evals_step = 0.0;
   if (!started) {
     start_scheme(nullptr, true);
@@ -714,11 +711,9 @@ void FixPEJump::quadrature_sum()
 
 void FixPEJump::auto_quadrature_sum()
 {
-  double **x = atom->x;
   double **f = atom->f;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const int nall = nlocal + atom->nghost;
   const double h = h_step;
   const std::vector<double> &c = rule->node;    // lobatto 5: 0, c1, 1/2, c3, 1
   const std::vector<double> &w = rule->weight;
@@ -813,7 +808,6 @@ void FixPEJump::evaluate_at(double shift, const int *select)
 void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, const int *select,
                              double **acc, double **fend)
 {
-  double **x = atom->x;
   double **f = atom->f;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
@@ -917,20 +911,7 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
     local[2] = h_step * h_step * stats[1];
     local[3] = stats[1];
     local[4] = stats[0];
-    if (xhold) {
-      double worst = 0.0;
-      for (int i = 0; i < nlocal; i++) {
-        if (!(mask[i] & groupbit)) continue;
-        const double a0 = x[i][0] - xhold[i][0], a1 = x[i][1] - xhold[i][1],
-                     a2 = x[i][2] - xhold[i][2];
-        const double l0 = a0 + lo * vhalf[i][0], l1 = a1 + lo * vhalf[i][1],
-                     l2 = a2 + lo * vhalf[i][2];
-        const double h0 = a0 + hi * vhalf[i][0], h1 = a1 + hi * vhalf[i][1],
-                     h2 = a2 + hi * vhalf[i][2];
-        worst = MAX(worst, MAX(l0 * l0 + l1 * l1 + l2 * l2, h0 * h0 + h1 * h1 + h2 * h2));
-      }
-      local[0] = worst;
-    }
+    if (xhold) local[0] = node_excursion(xhold, lo, hi, nullptr);
   } else {
     for (int i = 0; i < nlocal; i++) {
       if (!(mask[i] & groupbit)) continue;
@@ -963,6 +944,31 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
 }
 
 /* ----------------------------------------------------------------------
+   largest squared distance from the positions of the last neighbor list
+   build xhold of the nodes x + t v^{n+1/2}, t = lo and hi, of the owned
+   atoms of the group (with only[i] != 0 if only is given)
+------------------------------------------------------------------------- */
+
+double FixPEJump::node_excursion(double **xhold, double lo, double hi, const int *only) const
+{
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  double worst = 0.0;
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit) || (only && !only[i])) continue;
+    double dlo = 0.0, dhi = 0.0;
+    for (int k = 0; k < 3; k++) {
+      const double a = x[i][k] - xhold[i][k];
+      dlo += (a + lo * vhalf[i][k]) * (a + lo * vhalf[i][k]);
+      dhi += (a + hi * vhalf[i][k]) * (a + hi * vhalf[i][k]);
+    }
+    worst = MAX(worst, MAX(dlo, dhi));
+  }
+  return worst;
+}
+
+/* ----------------------------------------------------------------------
    local = largest excursion^2 from the last build positions (0 if not
    checked), step length^2, jump displacement^2 (h |[v]|)^2, |[v]|^2 and
    |v^{n+1/2}|^2 of the local atoms. The scheme is unstable if the jumps
@@ -978,10 +984,8 @@ void FixPEJump::finish_check(const double *local)
   MPI_Allreduce(local, global, 5, MPI_DOUBLE, MPI_MAX, world);
 
   // reference magnitude: the largest jump or velocity at the start of the run
-  if (ref_checks < REF_STEPS) {
-    jump_ref = MAX(jump_ref, MAX(global[3], global[4]));
-    if (jump_ref > 0.0) ++ref_checks;
-  }
+  // (at the first step where anything moves)
+  if (jump_ref == 0.0) jump_ref = MAX(global[3], global[4]);
   const double growth = (jump_ref > 0.0) ? sqrt(global[3] / jump_ref) : 0.0;
 
   const double half_skin = 0.5 * neighbor->skin;

@@ -116,7 +116,6 @@ class FixPEJump : public Fix {
   double stats[2];    // largest |v^{n+1/2}|^2, |[v]^n|^2 of the local atoms after the last step
   int stats_valid;    // stats describe the current state
   double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
-  int ref_checks;     // steps that contributed to jump_ref
 
   double evals_step, evals_total;    // force evaluations (units of full ones)
   bigint cached_step;
@@ -134,6 +133,7 @@ class FixPEJump : public Fix {
   void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
                        double hi2 = 0.0, double hsel = 0.0, const double *lag = nullptr);
   void finish_check(const double *local);
+  double node_excursion(double **xhold, double lo, double hi, const int *only) const;
   void tally_at_node();
   bool step_observed() const;
   bool tally_step() const;

@@ -431,21 +431,8 @@ void FixPEJumpAsync::check_lists()
                        MAX(hf2 * stats[1], hs2 * stats_slow[1]), MAX(stats[1], stats_slow[1]),
                        MAX(stats[0], stats_slow[0])};
     double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
-    if (xhold && (tally || (rule->size() > 1))) {
-      double **x = atom->x;
-      const int *mask = atom->mask;
-      const double lo = c_lo * h_step, hi = c_hi * h_step;
-      for (int i = 0; i < atom->nlocal; i++) {
-        if (!(mask[i] & groupbit) || !moving[i]) continue;
-        double dlo = 0.0, dhi = 0.0;
-        for (int k = 0; k < 3; k++) {
-          const double a = x[i][k] - xhold[i][k];
-          dlo += (a + lo * vhalf[i][k]) * (a + lo * vhalf[i][k]);
-          dhi += (a + hi * vhalf[i][k]) * (a + hi * vhalf[i][k]);
-        }
-        local[0] = MAX(local[0], MAX(dlo, dhi));
-      }
-    }
+    if (xhold && (tally || (rule->size() > 1)))
+      local[0] = node_excursion(xhold, c_lo * h_step, c_hi * h_step, moving.data());
     finish_check(local);
   } else if (!coarse_end) {
     check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), 0.0, 0.0, coarse_step);
