@@ -171,6 +171,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int c
   extlist = new int[size_vector]{1, 1, 0, 0, 0};
   restart_global = 1;
   restart_peratom = 1;
+  create_attribute = 1;
   comm_reverse = 3;
   force_reneighbor = 1;
   next_reneighbor = -1;
@@ -189,6 +190,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int c
   cached_step = -1;
 
   FixPEJump::grow_arrays(atom->nmax);
+  for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
 }
@@ -465,31 +467,12 @@ void FixPEJump::final_integrate()
   if (!direct) quadrature_sum();
   double **favg = direct ? atom->f : fsum;
 
-  double **x = atom->x;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
-  const int keep_start = rule->has_end_nodes();
   if (fhist1) std::swap(fhist1, fhist2);
-
-  double vv = 0.0, jj = 0.0;    // largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2, for check_excursion()
-  const double *rmass = atom->rmass;
-  const int *type = atom->type;
-  const double kick = 2.0 * h_step * force->ftm2v;
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
-    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
-    two_step_jump(dtfm, favg[i], jump[i], vhalf[i], atom->v[i]);
-    for (int k = 0; k < 3; k++) {
-      if (keep_start) fstart[i][k] = fsample[i][k];
-      if (fhist1) fhist1[i][k] = favg[i][k];
-    }
-    vv = MAX(vv, vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
-    jj = MAX(jj, jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
-  }
-  stats[0] = std::isfinite(vv) ? vv : BLOWUP;
-  stats[1] = std::isfinite(jj) ? jj : BLOWUP;
+  double mag[2] = {0.0, 0.0};
+  finish_step(nullptr, favg, rest, mag);
+  stats[0] = std::isfinite(mag[0]) ? mag[0] : BLOWUP;
+  stats[1] = std::isfinite(mag[1]) ? mag[1] : BLOWUP;
   stats_valid = 1;
 
   if (rest != 0.0) tally_at_node();
@@ -497,6 +480,46 @@ void FixPEJump::final_integrate()
   cached_step = -1;
   hlast2 = hlast;
   hlast = h_step;
+}
+
+/* ----------------------------------------------------------------------
+   the owned atoms of the group (those listed in only, if given) jump with
+   the quadrature sums favg of their forces over the step h_step and move on
+   by rest from the primary node to q^{n+1}; the start-node forces of the
+   next step and the force history are kept. mag[0], mag[1]: the largest
+   |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for check_excursion()
+------------------------------------------------------------------------- */
+
+void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, double *mag)
+{
+  double **x = atom->x;
+  double **v = atom->v;
+  const double *rmass = atom->rmass;
+  const int *type = atom->type;
+  const double kick = 2.0 * h_step * force->ftm2v;
+  const int keep_start = rule->has_end_nodes();
+  double vv = mag[0], jj = mag[1];
+  const auto one = [&](int i) {
+    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
+    two_step_jump(dtfm, favg[i], jump[i], vhalf[i], v[i]);
+    for (int k = 0; k < 3; k++) {
+      if (keep_start) fstart[i][k] = fsample[i][k];
+      if (fhist1) fhist1[i][k] = favg[i][k];
+    }
+    vv = MAX(vv, vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
+    jj = MAX(jj, jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
+  };
+  if (only) {
+    for (const int i : *only) one(i);
+  } else {
+    const int *mask = atom->mask;
+    const int nlocal = atom->nlocal;
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit) one(i);
+  }
+  mag[0] = vv;
+  mag[1] = jj;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -681,8 +704,7 @@ void FixPEJump::quadrature_sum()
 
   if (split_primary || reuse_start) primary_sampled_force();
 
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
+  const auto start_sum = [&](int i) {
     for (int k = 0; k < 3; k++) {
       if (split_primary)
         fsum[i][k] = wp * fsample[i][k] + (f[i][k] - fsample[i][k]);
@@ -690,7 +712,12 @@ void FixPEJump::quadrature_sum()
         fsum[i][k] = wp * f[i][k];
       if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
     }
-  }
+  };
+  if (node_select)
+    for (const int i : *node_select) start_sum(i);
+  else
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit) start_sum(i);
 
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
@@ -778,20 +805,24 @@ void FixPEJump::auto_quadrature_sum()
 }
 
 /* ----------------------------------------------------------------------
-   move the owned atoms of the group (with select[i] != 0 if select is
-   given) to xsave + shift v^{n+1/2} and evaluate the sampled forces there
+   move the owned atoms of the group (those listed in only, if given) to
+   xsave + shift v^{n+1/2} and evaluate the sampled forces there
 ------------------------------------------------------------------------- */
 
-void FixPEJump::evaluate_at(double shift, const int *select)
+void FixPEJump::evaluate_at(double shift, const AtomList *only)
 {
   double **x = atom->x;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit) || (select && !select[i])) continue;
+  const auto move = [&](int i) {
     x[i][0] = xsave[i][0] + shift * vhalf[i][0];
     x[i][1] = xsave[i][1] + shift * vhalf[i][1];
     x[i][2] = xsave[i][2] + shift * vhalf[i][2];
+  };
+  if (only) {
+    for (const int i : *only) move(i);
+  } else {
+    const int *mask = atom->mask;
+    for (int i = 0; i < atom->nlocal; i++)
+      if (mask[i] & groupbit) move(i);
   }
   sampler->compute(sample_mask, 0, 0);
   evals_step += node_cost();
@@ -800,12 +831,12 @@ void FixPEJump::evaluate_at(double shift, const int *select)
 /* ----------------------------------------------------------------------
    acc += sum_k w_k F(q_k) over the nodes k = first .. N-1 except skip, with
    q_k = x + (scale c_k + offset) v^{n+1/2} for the owned atoms of the group
-   (and with select[i] != 0 if select is given); all other atoms stay where
-   they are. fend (if given) receives the forces at the last node.
-   positions and forces are restored afterwards
+   (those listed in only, if given); all other atoms stay where they are.
+   fend (if given) receives the forces at the last node. Positions and
+   forces are restored afterwards
 ------------------------------------------------------------------------- */
 
-void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, const int *select,
+void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, const AtomList *only,
                              double **acc, double **fend)
 {
   double **f = atom->f;
@@ -813,24 +844,29 @@ void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, c
   const int nlocal = atom->nlocal;
   const int last = rule->size() - 1;
 
-  save_positions(select);
+  save_positions(only);
   if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
 
   for (int node = first; node <= last; node++) {
     if (node == skip) continue;
-    evaluate_at(scale * rule->node[node] + offset, select);
+    evaluate_at(scale * rule->node[node] + offset, only);
     const double w = rule->weight[node];
-    for (int i = 0; i < nlocal; i++) {
-      if (!(mask[i] & groupbit) || (select && !select[i])) continue;
+    const bool at_end = fend && (node == last);
+    const auto add = [&](int i) {
       acc[i][0] += w * f[i][0];
       acc[i][1] += w * f[i][1];
       acc[i][2] += w * f[i][2];
-      if (fend && (node == last))
+      if (at_end)
         for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
-    }
+    };
+    if (only)
+      for (const int i : *only) add(i);
+    else
+      for (int i = 0; i < nlocal; i++)
+        if (mask[i] & groupbit) add(i);
   }
 
-  restore_positions(select);
+  restore_positions(only);
   if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
 }
 
@@ -841,34 +877,30 @@ void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, c
    steps with output or end-of-step fixes, tally_at_node())
 ------------------------------------------------------------------------- */
 
-void FixPEJump::save_positions(const int *select)
+void FixPEJump::save_positions(const AtomList *only)
 {
   double **x = atom->x;
-  const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  if (!select) {
+  if (!only) {
     if (nlocal) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nlocal);
     return;
   }
-  for (int i = 0; i < nlocal; i++)
-    if ((mask[i] & groupbit) && select[i])
-      for (int k = 0; k < 3; k++) xsave[i][k] = x[i][k];
+  for (const int i : *only)
+    for (int k = 0; k < 3; k++) xsave[i][k] = x[i][k];
 }
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJump::restore_positions(const int *select)
+void FixPEJump::restore_positions(const AtomList *only)
 {
   double **x = atom->x;
-  const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  if (!select) {
+  if (!only) {
     if (nlocal) memcpy(&x[0][0], &xsave[0][0], 3 * sizeof(double) * nlocal);
     return;
   }
-  for (int i = 0; i < nlocal; i++)
-    if ((mask[i] & groupbit) && select[i])
-      for (int k = 0; k < 3; k++) x[i][k] = xsave[i][k];
+  for (const int i : *only)
+    for (int k = 0; k < 3; k++) x[i][k] = xsave[i][k];
 }
 
 /* ---------------------------------------------------------------------- */
@@ -946,17 +978,14 @@ void FixPEJump::check_excursion(double lo, double hi, const int *select, double 
 /* ----------------------------------------------------------------------
    largest squared distance from the positions of the last neighbor list
    build xhold of the nodes x + t v^{n+1/2}, t = lo and hi, of the owned
-   atoms of the group (with only[i] != 0 if only is given)
+   atoms of the group (those listed in only, if given)
 ------------------------------------------------------------------------- */
 
-double FixPEJump::node_excursion(double **xhold, double lo, double hi, const int *only) const
+double FixPEJump::node_excursion(double **xhold, double lo, double hi, const AtomList *only) const
 {
   double **x = atom->x;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
   double worst = 0.0;
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit) || (only && !only[i])) continue;
+  const auto excursion = [&](int i) {
     double dlo = 0.0, dhi = 0.0;
     for (int k = 0; k < 3; k++) {
       const double a = x[i][k] - xhold[i][k];
@@ -964,6 +993,13 @@ double FixPEJump::node_excursion(double **xhold, double lo, double hi, const int
       dhi += (a + hi * vhalf[i][k]) * (a + hi * vhalf[i][k]);
     }
     worst = MAX(worst, MAX(dlo, dhi));
+  };
+  if (only) {
+    for (const int i : *only) excursion(i);
+  } else {
+    const int *mask = atom->mask;
+    for (int i = 0; i < atom->nlocal; i++)
+      if (mask[i] & groupbit) excursion(i);
   }
   return worst;
 }
@@ -1299,6 +1335,21 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
       fhist1[j][k] = fhist1[i][k];
       fhist2[j][k] = fhist2[i][k];
     }
+  }
+}
+
+/* ----------------------------------------------------------------------
+   an atom created during the simulation has no two-step state: a zero one
+   differs from its velocity (if it moves), so the next run restarts the
+   scheme; one created at rest starts without the initial kick
+------------------------------------------------------------------------- */
+
+void FixPEJump::set_arrays(int i)
+{
+  for (int k = 0; k < 3; k++) {
+    vhalf[i][k] = jump[i][k] = 0.0;
+    if (fstart) fstart[i][k] = 0.0;
+    if (fhist1) fhist1[i][k] = fhist2[i][k] = 0.0;
   }
 }
 

@@ -51,6 +51,7 @@ class FixPEJump : public Fix {
 
   void grow_arrays(int) override;
   void copy_arrays(int, int, int) override;
+  void set_arrays(int) override;
   int pack_exchange(int, double *) override;
   int unpack_exchange(int, double *) override;
   void write_restart(FILE *) override;
@@ -78,9 +79,12 @@ class FixPEJump : public Fix {
   // quadrature auto: defect tolerance (energy), steps done with lobatto 3 and 5
   double auto_tol;
   bigint auto_steps[3];
-  double **fnode;            // work: forces at the middle node
-  const int *node_select;    // if set: only these owned atoms move to the nodes
-  char *id_pe;               // compute pe that requests the energy at every step
+  double **fnode;    // work: forces at the middle node
+
+  // local indices of owned atoms of the group; nullptr stands for all of them
+  using AtomList = std::vector<int>;
+  const AtomList *node_select;    // if set: only these atoms move to the nodes
+  char *id_pe;                    // compute pe that requests the energy at every step
   class Compute *c_pe;
   double vprev;    // potential energy at the start of the step
 
@@ -125,15 +129,15 @@ class FixPEJump : public Fix {
   void primary_sampled_force();
   void quadrature_sum();
   void auto_quadrature_sum();
-  void evaluate_at(double shift, const int *select);
-  void save_positions(const int *select);
-  void restore_positions(const int *select);
-  void sample_nodes(int first, int skip, double scale, double offset, const int *select,
+  void evaluate_at(double shift, const AtomList *only);
+  void save_positions(const AtomList *only);
+  void restore_positions(const AtomList *only);
+  void sample_nodes(int first, int skip, double scale, double offset, const AtomList *only,
                     double **acc, double **fend);
   void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
                        double hi2 = 0.0, double hsel = 0.0, const double *lag = nullptr);
   void finish_check(const double *local);
-  double node_excursion(double **xhold, double lo, double hi, const int *only) const;
+  double node_excursion(double **xhold, double lo, double hi, const AtomList *only) const;
   void tally_at_node();
   bool step_observed() const;
   bool tally_step() const;
@@ -150,6 +154,7 @@ class FixPEJump : public Fix {
   // forces over a step of size h: [v]^{n+1} = 2 h favg / m - [v]^n,
   // v^{n+3/2} = v^{n+1/2} + [v]^{n+1}, node velocity v^{n+1}
   void jump_atom(int i, double h, const double *favg);
+  void finish_step(const AtomList *only, double **favg, double rest, double *mag);
 
   // the same for the arrays of one atom, with dtfm = 2 h ftm2v / m
   static inline void two_step_jump(double dtfm, const double *favg, double *jmp, double *vh,

@@ -58,7 +58,7 @@ static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, 0), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
     reverse_flags(nullptr), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr),
-    klass(nullptr), tlag(nullptr), fcoarse(nullptr), nmax_coarse(0)
+    klass(nullptr), tpos(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -80,7 +80,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
   counts[0] = counts[1] = counts[2] = 0.0;
-  stats_slow[0] = stats_slow[1] = stats_interior[0] = stats_interior[1] = 0.0;
+  stats_slow[0] = stats_slow[1] = 0.0;
   split = new InteractionSplit(lmp, groupbit, finebit);
 
   size_vector = 9;
@@ -94,7 +94,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   FixPEJumpAsync::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) {
     klass[i] = OUTSIDE;
-    tlag[i] = 0.0;
+    tpos[i] = CURRENT;
     for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
   }
 }
@@ -107,7 +107,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
   memory->destroy(facc);
   memory->destroy(fstart_coarse);
   memory->destroy(klass);
-  memory->destroy(tlag);
+  memory->destroy(tpos);
   memory->destroy(fcoarse);
 }
 
@@ -208,40 +208,48 @@ void FixPEJumpAsync::find_moving()
   comm->reverse_comm(this, 1);
   reverse_flags = nullptr;
 
+  const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   moving.resize(nlocal);
+  moving_atoms.clear();
+  fast_atoms.clear();
+  slow_moving.clear();
   int caught = 0;
   for (int i = 0; i < nlocal; i++) {
     moving[i] = !slow[i] || participant[i];
-    if (moving[i] && (tlag[i] != 0.0)) {
-      catch_up(i);
-      caught = 1;
+    if (!(mask[i] & groupbit)) continue;
+    if (moving[i]) {
+      moving_atoms.push_back(i);
+      (slow[i] ? slow_moving : fast_atoms).push_back(i);
+      if (tpos[i] != CURRENT) {
+        catch_up(i);
+        caught = 1;
+      }
+    } else if (tpos[i] == CURRENT) {
+      tpos[i] = tnow;    // stays here until it is needed
     }
   }
   int any = 0;
   MPI_Allreduce(&caught, &any, 1, MPI_INT, MPI_MAX, world);
   if (any) comm->forward_comm();
-
-  if (started) interior_magnitudes();
 }
 
 /* ----------------------------------------------------------------------
-   largest |v|^2 and |[v]|^2 of the atoms that final_integrate() passes over
+   largest |v|^2 and |[v]|^2 of the local slow atoms (they change only at
+   coarse nodes)
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::interior_magnitudes()
+void FixPEJumpAsync::slow_magnitudes()
 {
-  const int nlocal = atom->nlocal;
-  stats_interior[0] = stats_interior[1] = 0.0;
-  for (int i = 0; i < nlocal; i++) {
-    if (!(atom->mask[i] & groupbit) || moving[i]) continue;
+  stats_slow[0] = stats_slow[1] = 0.0;
+  for (const int i : slow_atoms) {
     double vv = 0.0, jj = 0.0;
     for (int k = 0; k < 3; k++) {
       vv += vhalf[i][k] * vhalf[i][k];
       jj += jump[i][k] * jump[i][k];
     }
-    stats_interior[0] = MAX(stats_interior[0], vv);
-    stats_interior[1] = MAX(stats_interior[1], jj);
+    stats_slow[0] = MAX(stats_slow[0], vv);
+    stats_slow[1] = MAX(stats_slow[1], jj);
   }
 }
 
@@ -250,32 +258,48 @@ void FixPEJumpAsync::interior_magnitudes()
 void FixPEJumpAsync::catch_up(int i)
 {
   double **x = atom->x;
-  for (int k = 0; k < 3; k++) x[i][k] += tlag[i] * vhalf[i][k];
-  tlag[i] = 0.0;
+  const double lag = tnow - tpos[i];
+  if (lag != 0.0)
+    for (int k = 0; k < 3; k++) x[i][k] += lag * vhalf[i][k];
+  tpos[i] = moving[i] ? CURRENT : tnow;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::catch_up_all()
+{
+  const int nlocal = atom->nlocal;
+  for (int i = 0; i < nlocal; i++)
+    if (tpos[i] != CURRENT) catch_up(i);
 }
 
 /* ----------------------------------------------------------------------
-   free flight to the primary node: moving atoms every fine step, the
-   others (interior slow atoms) only at the last fine step of a coarse step
+   free flight to the primary node: the moving atoms every fine step, all
+   atoms of the group (the interior slow ones from where they stopped) at
+   the last fine step of a coarse step
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::advance(double t)
 {
   double **x = atom->x;
+  tnow = elapsed + t;
+  if (fine_index + 1 < nfine) {
+    for (const int i : moving_atoms) {
+      x[i][0] += t * vhalf[i][0];
+      x[i][1] += t * vhalf[i][1];
+      x[i][2] += t * vhalf[i][2];
+    }
+    return;
+  }
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const bool coarse_end = (fine_index + 1 >= nfine);
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
-    if (!(moving[i] || coarse_end)) {
-      tlag[i] += t;
-      continue;
-    }
-    const double dt = tlag[i] + t;
+    const double dt = (tpos[i] == CURRENT) ? t : tnow - tpos[i];
     x[i][0] += dt * vhalf[i][0];
     x[i][1] += dt * vhalf[i][1];
     x[i][2] += dt * vhalf[i][2];
-    tlag[i] = 0.0;
+    tpos[i] = CURRENT;
   }
 }
 
@@ -289,7 +313,7 @@ void FixPEJumpAsync::setup(int vflag)
   find_slow();
   find_moving();
   FixPEJump::setup(vflag);
-  interior_magnitudes();
+  slow_magnitudes();
   label_classes();
 }
 
@@ -299,13 +323,14 @@ void FixPEJumpAsync::setup(int vflag)
 
 void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
-  for (int i = 0; i < atom->nlocal; i++)
-    if (tlag[i] != 0.0) catch_up(i);
+  catch_up_all();
   if (with_start) {
     fine_index = 0;
-    elapsed = 0.0;
-    for (int i = 0; i < atom->nlocal; i++)
+    elapsed = tnow = 0.0;
+    for (int i = 0; i < atom->nlocal; i++) {
+      if (tpos[i] != CURRENT) tpos[i] = 0.0;
       for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
+    }
   }
   FixPEJump::start_scheme(why, with_start);
 }
@@ -403,9 +428,14 @@ void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 
 void FixPEJumpAsync::find_slow()
 {
+  const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   slow.resize(nlocal);
-  for (int i = 0; i < nlocal; i++) slow[i] = split->coarse(i);
+  slow_atoms.clear();
+  for (int i = 0; i < nlocal; i++) {
+    slow[i] = split->coarse(i);
+    if (slow[i] && (mask[i] & groupbit)) slow_atoms.push_back(i);
+  }
 }
 
 /* ----------------------------------------------------------------------
@@ -432,14 +462,17 @@ void FixPEJumpAsync::check_lists()
                        MAX(stats[0], stats_slow[0])};
     double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
     if (xhold && (tally || (rule->size() > 1)))
-      local[0] = node_excursion(xhold, c_lo * h_step, c_hi * h_step, moving.data());
+      local[0] = node_excursion(xhold, c_lo * h_step, c_hi * h_step, &moving_atoms);
     finish_check(local);
   } else if (!coarse_end) {
     check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), 0.0, 0.0, coarse_step);
   } else {
     const double span = elapsed + h_step;
+    const int nlocal = atom->nlocal;
+    lag.resize(nlocal);
+    for (int i = 0; i < nlocal; i++) lag[i] = (tpos[i] == CURRENT) ? 0.0 : elapsed - tpos[i];
     check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), c_lo * span - elapsed,
-                    rule->node.back() * span - elapsed, coarse_step, tlag);
+                    rule->node.back() * span - elapsed, coarse_step, lag.data());
   }
 }
 
@@ -451,16 +484,14 @@ void FixPEJumpAsync::check_lists()
 
 void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 {
-  const int nlocal = atom->nlocal;
   const int reuse_start = rule->has_end_nodes();
-  for (int i = 0; i < nlocal; i++) {
-    if (!slow[i]) continue;
+  for (const int i : slow_atoms) {
     for (int k = 0; k < 3; k++)
       fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
   }
   const double at = elapsed + rule->node[rule->primary()] * h_step;
   split->activate(InteractionSplit::COARSE);
-  sample_nodes(reuse_start ? 1 : 0, -1, coarse_step, -at, slow.data(), fcoarse,
+  sample_nodes(reuse_start ? 1 : 0, -1, coarse_step, -at, &slow_atoms, fcoarse,
                reuse_start ? fstart_coarse : nullptr);
   split->restore();
 }
@@ -490,15 +521,15 @@ void FixPEJumpAsync::final_integrate()
   const bool direct = (rule->size() == 1) && !split_primary;
   if (!direct) {
     split->activate(InteractionSplit::FINE);
-    node_select = moving.data();
+    node_select = &moving_atoms;
     quadrature_sum();
     node_select = nullptr;
     split->restore();
   }
-  double **favg = direct ? atom->f : fsum;
   if (coarse_end) coarse_quadrature_sum(coarse_step);
 
   double **x = atom->x;
+  double **f = atom->f;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
@@ -509,65 +540,61 @@ void FixPEJumpAsync::final_integrate()
   const int *type = atom->type;
   double **v = atom->v;
   const double kick = 2.0 * h_step * force->ftm2v;
-  // per clock: largest |v|^2, |[v]|^2 (interior slow atoms change only at
-  // coarse nodes: their magnitudes are kept from there)
+  double **favg = direct ? f : fsum;
+  // per clock: largest |v|^2, |[v]|^2; the slow atoms' change only at
+  // coarse nodes
   double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
-  if (!coarse_end) {
-    mag[1][0] = stats_interior[0];
-    mag[1][1] = stats_interior[1];
-  }
-  double interior[2] = {0.0, 0.0};
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    if (!(moving[i] || coarse_end)) {
-      tlag[i] += rest;
-      // no fine interaction and no other fix acts on it: nothing else changes
-      if (!other_forces) continue;
-    } else {
-      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
-    }
-    if (keep_start)
-      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
-    if (!slow[i]) {
-      const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
-      two_step_jump(dtfm, favg[i], jump[i], vhalf[i], v[i]);
-    } else {
-      for (int k = 0; k < 3; k++) facc[i][k] += h_step * favg[i][k];
-      if (coarse_end) {
+  if (coarse_end) {
+    // every atom reaches the coarse node, the slow ones jump too
+    const auto coarse_node = [&](int i) {
+      const double dt = (tpos[i] == CURRENT) ? rest : coarse_step - tpos[i];
+      for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf[i][k];
+      if (keep_start)
+        for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+      // interior slow atoms have no fine interactions: only other fixes' forces
+      const double *fa = moving[i] ? favg[i] : f[i];
+      if (!slow[i]) {
+        const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
+        two_step_jump(dtfm, fa, jump[i], vhalf[i], v[i]);
+      } else {
         double fslow[3];
         for (int k = 0; k < 3; k++) {
-          fslow[k] = facc[i][k] / coarse_step + fcoarse[i][k];
+          fslow[k] = (facc[i][k] + h_step * fa[k]) / coarse_step + fcoarse[i][k];
           facc[i][k] = 0.0;
         }
         jump_atom(i, coarse_step, fslow);
       }
+      double *m = mag[slow[i]];
+      m[0] = MAX(m[0],
+                 vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
+      m[1] = MAX(m[1], jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
+      tpos[i] = moving[i] ? CURRENT : 0.0;    // at the start of the next coarse step
+    };
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit) coarse_node(i);
+    for (int k = 0; k < 2; k++) stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : BLOWUP;
+  } else {
+    // the atoms on the fine clock take a synchronous step; of the slow atoms
+    // those in a fine interaction move on, and they (and the others, if
+    // other fixes add forces) collect the fine forces
+    finish_step(&fast_atoms, favg, rest, mag[0]);
+    for (const int i : slow_moving)
+      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+    for (const int i : other_forces ? slow_atoms : slow_moving) {
+      const double *fa = moving[i] ? favg[i] : f[i];
+      for (int k = 0; k < 3; k++) {
+        if (keep_start) fstart[i][k] = fsample[i][k];
+        facc[i][k] += h_step * fa[k];
+      }
     }
-    double *m = mag[slow[i]];
-    const double vv =
-        vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2];
-    const double jj = jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2];
-    m[0] = MAX(m[0], vv);
-    m[1] = MAX(m[1], jj);
-    if (coarse_end && slow[i] && !moving[i]) {
-      interior[0] = MAX(interior[0], vv);
-      interior[1] = MAX(interior[1], jj);
-    }
   }
-  if (coarse_end) {
-    stats_interior[0] = interior[0];
-    stats_interior[1] = interior[1];
-  }
-  for (int k = 0; k < 2; k++) {
-    stats[k] = std::isfinite(mag[0][k]) ? mag[0][k] : BLOWUP;
-    stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : BLOWUP;
-  }
+  for (int k = 0; k < 2; k++) stats[k] = std::isfinite(mag[0][k]) ? mag[0][k] : BLOWUP;
   stats_valid = 1;
 
   // interior slow atoms catch up wherever their positions are looked at:
   // output, other fixes at the end of the step, the end of the run
-  if (!coarse_end && step_observed())
-    for (int i = 0; i < nlocal; i++)
-      if (tlag[i] != 0.0) catch_up(i);
+  tnow = coarse_end ? 0.0 : coarse_step;
+  if (!coarse_end && step_observed()) catch_up_all();
 
   tally_at_node();
   evals_total += evals_step;
@@ -656,7 +683,7 @@ void FixPEJumpAsync::grow_arrays(int nmax)
   memory->grow(facc, nmax, 3, "pe_jump/async:facc");
   if (rule->has_end_nodes()) memory->grow(fstart_coarse, nmax, 3, "pe_jump/async:fstart_coarse");
   memory->grow(klass, nmax, "pe_jump/async:klass");
-  memory->grow(tlag, nmax, "pe_jump/async:tlag");
+  memory->grow(tpos, nmax, "pe_jump/async:tpos");
   vector_atom = klass;
 }
 
@@ -670,7 +697,22 @@ void FixPEJumpAsync::copy_arrays(int i, int j, int delflag)
     if (fstart_coarse) fstart_coarse[j][k] = fstart_coarse[i][k];
   }
   klass[j] = klass[i];
-  tlag[j] = tlag[i];
+  tpos[j] = tpos[i];
+}
+
+/* ----------------------------------------------------------------------
+   an atom created during the simulation
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::set_arrays(int i)
+{
+  FixPEJump::set_arrays(i);
+  for (int k = 0; k < 3; k++) {
+    facc[i][k] = 0.0;
+    if (fstart_coarse) fstart_coarse[i][k] = 0.0;
+  }
+  klass[i] = OUTSIDE;
+  tpos[i] = CURRENT;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -682,7 +724,7 @@ int FixPEJumpAsync::pack_exchange(int i, double *buf)
   if (fstart_coarse)
     for (int k = 0; k < 3; k++) buf[m++] = fstart_coarse[i][k];
   buf[m++] = klass[i];
-  buf[m++] = tlag[i];
+  buf[m++] = tpos[i];
   return m;
 }
 
@@ -695,7 +737,7 @@ int FixPEJumpAsync::unpack_exchange(int nlocal, double *buf)
   if (fstart_coarse)
     for (int k = 0; k < 3; k++) fstart_coarse[nlocal][k] = buf[m++];
   klass[nlocal] = buf[m++];
-  tlag[nlocal] = buf[m++];
+  tpos[nlocal] = buf[m++];
   return m;
 }
 
@@ -733,7 +775,7 @@ void FixPEJumpAsync::restart(char *buf)
     return;
   }
   fine_index = static_cast<int>(list[NGLOBAL + 1]);
-  elapsed = list[NGLOBAL + 2];
+  elapsed = tnow = list[NGLOBAL + 2];
 }
 
 /* ---------------------------------------------------------------------- */

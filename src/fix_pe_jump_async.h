@@ -47,6 +47,7 @@ class FixPEJumpAsync : public FixPEJump {
 
   void grow_arrays(int) override;
   void copy_arrays(int, int, int) override;
+  void set_arrays(int) override;
   int pack_exchange(int, double *) override;
   int unpack_exchange(int, double *) override;
   void write_restart(FILE *) override;
@@ -64,7 +65,6 @@ class FixPEJumpAsync : public FixPEJump {
   double elapsed;                     // time elapsed in the current coarse step
   double counts[3];                   // global number of slow, mixed, fast atoms
   double stats_slow[2];               // largest |v|^2, |[v]|^2 of the local slow atoms
-  double stats_interior[2];           // ... of those that do not move on fine steps
   std::vector<int> *reverse_flags;    // reverse communication carries these flags
   bigint split_calls;                 // neighbor->ncalls when the interactions were split
 
@@ -75,10 +75,15 @@ class FixPEJumpAsync : public FixPEJump {
   // slow-interaction force at the coarse start node, and the class
   double **facc, **fstart_coarse;
   double *klass;
-  // per-atom time by which the position lags behind the free flight: slow
-  // atoms that take part in no fine interaction (interior ones) do not move
-  // on fine steps but catch up at the coarse node (or when they meet one)
-  double *tlag;
+  // slow atoms that take part in no fine interaction (interior ones) do not
+  // move on fine steps but catch up with their free flight at the coarse
+  // node (or when they join a fine interaction, or are looked at). tpos:
+  // per atom, the time within the coarse step its position belongs to, or
+  // CURRENT if it moves with the fine steps; tnow: the time within the coarse
+  // step of the atoms that move
+  double *tpos;
+  double tnow;
+  static constexpr double CURRENT = -1.0;
 
   double **fcoarse;    // work: coarse quadrature sum of the slow interactions
   int nmax_coarse;
@@ -86,6 +91,11 @@ class FixPEJumpAsync : public FixPEJump {
   std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
   std::vector<int> moving;            // owned atoms: 1 if they move on fine steps
   std::vector<int> participant;       // owned and ghost atoms: in a fine interaction
+  AtomList moving_atoms;              // the atoms of the group that move on fine steps:
+  AtomList fast_atoms;                // those on the fine clock
+  AtomList slow_moving;               // and the slow ones in a fine interaction
+  AtomList slow_atoms;                // the atoms of the group on the coarse clock
+  std::vector<double> lag;            // work: time by which an atom lags behind
 
   void start_scheme(const char *, bool) override;
   double kick_step(int) const override;
@@ -99,8 +109,9 @@ class FixPEJumpAsync : public FixPEJump {
 
   void find_slow();
   void find_moving();
-  void interior_magnitudes();
+  void slow_magnitudes();
   void catch_up(int i);
+  void catch_up_all();
   void coarse_quadrature_sum(double coarse_step);
   void label_classes();
 };

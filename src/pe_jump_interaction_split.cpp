@@ -80,14 +80,14 @@ void InteractionSplit::build()
   for (int n = 0; n < neighbor->nlist; n++) {
     NeighList *list = neighbor->lists[n];
     if (!list || list->occasional || (list->requestor_type != NeighList::PAIR)) continue;
-    pairs.push_back({list, nullptr, nullptr, {}});
+    pairs.push_back({list, 0, nullptr, nullptr, nullptr, {}});
     split_pairs(pairs.back());
   }
 
   double local[3] = {0.0, 0.0, 0.0};    // interactions: fine, coarse, all
   for (const auto &p : pairs)
     for (int s = 0; s < 2; s++)
-      for (int ii = 0; ii < p.list->inum; ii++) local[s] += p.part[s].numneigh[p.list->ilist[ii]];
+      for (const int i : p.part[s].ilist) local[s] += p.part[s].numneigh[i];
 
   const bool molecular = (atom->molecular != Atom::ATOMIC);
   topo[0].on = molecular && force->bond;
@@ -118,6 +118,7 @@ void InteractionSplit::split_pairs(PairList &p)
   const int *ilist = list->ilist;
 
   for (auto &part : p.part) {
+    part.ilist.clear();
     part.numneigh.assign(nall, 0);
     part.firstneigh.assign(nall, nullptr);
     part.neigh.clear();
@@ -155,6 +156,7 @@ void InteractionSplit::split_pairs(PairList &p)
       auto &part = p.part[s];
       part.numneigh[i] = static_cast<int>(part.neigh.size() - start[s]);
       part.firstneigh[i] = part.neigh.data() + start[s];
+      if (part.numneigh[i] > 0) part.ilist.push_back(i);
     }
   }
 }
@@ -176,8 +178,12 @@ void InteractionSplit::activate(Subset which)
 {
   restore();
   for (auto &p : pairs) {
+    p.inum = p.list->inum;
+    p.ilist = p.list->ilist;
     p.numneigh = p.list->numneigh;
     p.firstneigh = p.list->firstneigh;
+    p.list->inum = static_cast<int>(p.part[which].ilist.size());
+    p.list->ilist = p.part[which].ilist.data();
     p.list->numneigh = p.part[which].numneigh.data();
     p.list->firstneigh = p.part[which].firstneigh.data();
   }
@@ -195,6 +201,8 @@ void InteractionSplit::restore()
 {
   if (current == NONE) return;
   for (auto &p : pairs) {
+    p.list->inum = p.inum;
+    p.list->ilist = p.ilist;
     p.list->numneigh = p.numneigh;
     p.list->firstneigh = p.firstneigh;
   }
@@ -246,9 +254,7 @@ void InteractionSplit::mark_fine_participants(std::vector<int> &flag) const
   flag.assign(atom->nlocal + atom->nghost, 0);
   for (const auto &p : pairs) {
     const auto &part = p.part[FINE];
-    for (int ii = 0; ii < p.list->inum; ii++) {
-      const int i = p.list->ilist[ii];
-      if (part.numneigh[i] == 0) continue;
+    for (const int i : part.ilist) {
       flag[i] = 1;
       for (int jj = 0; jj < part.numneigh[i]; jj++) flag[part.firstneigh[i][jj] & NEIGHMASK] = 1;
     }

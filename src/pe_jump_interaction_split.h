@@ -71,12 +71,15 @@ namespace PEJump {
 
     // one pair neighbor list, its original arrays and both subsets
     struct PairSubset {
+      std::vector<int> ilist;    // the atoms with neighbors in the subset
       std::vector<int> numneigh;
       std::vector<int *> firstneigh;
       std::vector<int> neigh;
     };
     struct PairList {
       NeighList *list;
+      int inum;
+      int *ilist;
       int *numneigh;
       int **firstneigh;
       PairSubset part[2];
