@@ -3,7 +3,8 @@
 
   /usr/bin/python3 bench/stability/stress.py [--quick] [--studies cfl,long,string,resonance,hard]
 
-Studies (results as JSON in bench/stability/results/, plots doc/stability_*.png):
+Studies (results as JSON in bench/stability/results/, plots doc/stability_*.png;
+with --quick both go to bench/work/stability/ instead):
   cfl        largest stable step by bisection against 2/omega_max (numpy) for
              harmonic chains and a 2d spring lattice; fix nve, pe_jump midpoint,
              pe_jump lobatto 3
@@ -710,9 +711,11 @@ def study_hard():
 
 
 def save(name, obj):
-    os.makedirs(RESULTS, exist_ok=True)
+    # the quick run keeps its results out of the repository
+    where = os.path.join(WORK, "results") if QUICK else RESULTS
+    os.makedirs(where, exist_ok=True)
     suffix = "_quick" if QUICK else ""
-    with open(os.path.join(RESULTS, f"{name}{suffix}.json"), "w") as f:
+    with open(os.path.join(where, f"{name}{suffix}.json"), "w") as f:
         json.dump(obj, f, indent=1, default=float)
 
 
@@ -732,7 +735,7 @@ def main():
         sfx = "_quick" if QUICK else ""
         plots = dict(cfl=plot_cfl, long=plot_long, string=plot_string, resonance=plot_resonance)
         for s in a.studies.split(","):
-            f = os.path.join(RESULTS, f"{s}{sfx}.json")
+            f = os.path.join(os.path.join(WORK, "results") if QUICK else RESULTS, f"{s}{sfx}.json")
             if s in plots and os.path.exists(f):
                 plots[s](json.load(open(f)))
         return
