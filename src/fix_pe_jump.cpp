@@ -54,11 +54,11 @@ static constexpr int ADAPT_BISECT = 40;         // bisections of the largest adm
 
 /* ---------------------------------------------------------------------- */
 
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3, 1) {}
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3, false) {}
 
 /* ---------------------------------------------------------------------- */
 
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int compensate_default) :
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool two_clocks) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), fnode(nullptr), node_select(nullptr),
     fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), vhalf(nullptr), jump(nullptr),
     fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr)
@@ -71,7 +71,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int c
   sample_mask = ForceSampler::ALL;
   adapt = 0;
   adapt_eps = adapt_dtmin = adapt_dtmax = 0.0;
-  compensate = compensate_default;
+  compensate = two_clocks ? 0 : 1;
+  buffer_layers = 0;
   auto_tol = 0.0;
   auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
   id_pe = nullptr;
@@ -126,6 +127,15 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, int c
       if ((adapt_dtmin <= 0.0) || (adapt_dtmax < adapt_dtmin))
         error->all(FLERR, "Fix {} adapt needs 0 < dtmin <= dtmax", style);
       iarg += 4;
+    } else if (strcmp(arg[iarg], "buffer") == 0) {
+      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " buffer", error);
+      if (!two_clocks)
+        error->all(FLERR,
+                   "Fix {} has a single clock: the buffer keyword belongs to fix pe_jump/async",
+                   style);
+      buffer_layers = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
+      if (buffer_layers < 0) error->all(FLERR, "Fix {} buffer needs N >= 0", style);
+      iarg += 2;
     } else if (strcmp(arg[iarg], "compensate") == 0) {
       if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " compensate", error);
       compensate = utils::logical(FLERR, arg[iarg + 1], false, lmp);

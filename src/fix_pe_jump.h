@@ -67,9 +67,10 @@ class FixPEJump : public Fix {
  protected:
   enum Init { INIT_KICK, INIT_PAPER };
 
-  // for derived styles: keywords are parsed from arg[first_keyword] on,
-  // compensate_default is the default of the compensate keyword
-  FixPEJump(class LAMMPS *, int, char **, int first_keyword, int compensate_default);
+  // for derived styles: keywords are parsed from arg[first_keyword] on;
+  // the slow/fast style has fixed steps (compensate is off by default) and
+  // takes the buffer keyword
+  FixPEJump(class LAMMPS *, int, char **, int first_keyword, bool two_clocks);
 
   PEJump::Quadrature *rule;
   PEJump::ForceSampler *sampler;
@@ -95,6 +96,7 @@ class FixPEJump : public Fix {
   double **fhist1, **fhist2;    // per atom: averaged forces of the last two steps
   double hlast, hlast2;         // sizes of the last two steps, 0 if there are none
   int compensate;               // compensate the parasitic jump of step-size changes
+  int buffer_layers;            // pe_jump/async: layers of slow atoms moved to the fine clock
 
   // per-atom state, velocity units: free-flight velocity v^{n+1/2},
   // jump [v]^n, and (Lobatto rules) the sampled force at the start node

@@ -56,9 +56,10 @@ static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
-    FixPEJump(lmp, narg, arg, 5, 0), nfine(1), finebit(0), fine_index(0), elapsed(0.0),
-    reverse_flags(nullptr), split_calls(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr),
-    klass(nullptr), tpos(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
+    FixPEJump(lmp, narg, arg, 5, true), nfine(1), finebit(0), clockbit(0), fine_index(0),
+    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), split(nullptr), facc(nullptr),
+    fstart_coarse(nullptr), klass(nullptr), tpos(nullptr), tnow(0.0), fcoarse(nullptr),
+    nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -81,7 +82,13 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
 
   counts[0] = counts[1] = counts[2] = 0.0;
   stats_slow[0] = stats_slow[1] = 0.0;
-  split = new InteractionSplit(lmp, groupbit, finebit);
+  // with buffer layers the fine clock is a group of its own, kept with the
+  // atoms (and in restart files)
+  clockbit = finebit;
+  if (buffer_layers > 0)
+    clockbit = group->bitmask[group->find_or_create((std::string(id) + "_fine_clock").c_str())];
+  comm_forward = 1;
+  split = new InteractionSplit(lmp, groupbit, clockbit);
 
   size_vector = 9;
   delete[] extlist;
@@ -179,6 +186,38 @@ void FixPEJumpAsync::init()
 void FixPEJumpAsync::setup_post_neighbor()
 {
   post_neighbor();
+}
+
+/* ----------------------------------------------------------------------
+   buffer keyword, when the scheme starts: the fine clock takes the fast
+   group and, layer by layer, the atoms of the fix group that share an
+   interaction (a bonded one, or a pair of the neighbor lists) with an atom
+   on the fine clock. The slow partners of the interface then move on the
+   fine clock with it, which keeps the period-2 mode of the slow interface
+   atoms out of resonance with the fast region.
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::assign_buffer()
+{
+  int *mask = atom->mask;
+  const int nall = atom->nlocal + atom->nghost;
+  for (int i = 0; i < nall; i++) {
+    if (mask[i] & finebit)
+      mask[i] |= clockbit;
+    else
+      mask[i] &= ~clockbit;
+  }
+  for (int layer = 0; layer < buffer_layers; layer++) {
+    split->build();
+    split->mark_fine_participants(participant);
+    reverse_flags = &participant;
+    comm->reverse_comm(this, 1);
+    reverse_flags = nullptr;
+    for (int i = 0; i < atom->nlocal; i++)
+      if (participant[i] && (mask[i] & groupbit)) mask[i] |= clockbit;
+    comm->forward_comm(this);
+  }
+  split_calls = -1;    // split the lists again for the new clocks
 }
 
 /* ----------------------------------------------------------------------
@@ -307,6 +346,7 @@ void FixPEJumpAsync::advance(double t)
 
 void FixPEJumpAsync::setup(int vflag)
 {
+  if ((buffer_layers > 0) && !started) assign_buffer();
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
@@ -637,6 +677,31 @@ void FixPEJumpAsync::label_classes()
     if (klass[i] != OUTSIDE) local[static_cast<int>(klass[i])] += 1.0;
   }
   MPI_Allreduce(local, counts, 3, MPI_DOUBLE, MPI_SUM, world);
+}
+
+/* ----------------------------------------------------------------------
+   the fine clock of the ghost atoms, after assign_buffer()
+------------------------------------------------------------------------- */
+
+int FixPEJumpAsync::pack_forward_comm(int n, int *list, double *buf, int /*pbc_flag*/,
+                                      int * /*pbc*/)
+{
+  const int *mask = atom->mask;
+  for (int i = 0; i < n; i++) buf[i] = (mask[list[i]] & clockbit) ? 1.0 : 0.0;
+  return n;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::unpack_forward_comm(int n, int first, double *buf)
+{
+  int *mask = atom->mask;
+  for (int i = 0; i < n; i++) {
+    if (buf[i] != 0.0)
+      mask[first + i] |= clockbit;
+    else
+      mask[first + i] &= ~clockbit;
+  }
 }
 
 /* ---------------------------------------------------------------------- */

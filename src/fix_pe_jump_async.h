@@ -52,6 +52,8 @@ class FixPEJumpAsync : public FixPEJump {
   int unpack_exchange(int, double *) override;
   void write_restart(FILE *) override;
   void restart(char *) override;
+  int pack_forward_comm(int, int *, double *, int, int *) override;
+  void unpack_forward_comm(int, int, double *) override;
   int pack_reverse_comm(int, int, double *) override;
   void unpack_reverse_comm(int, int *, double *) override;
   double memory_usage() override;
@@ -61,6 +63,7 @@ class FixPEJumpAsync : public FixPEJump {
 
   int nfine;                          // K: fine steps per coarse step
   int finebit;                        // group bit of the fast group
+  int clockbit;                       // group bit of the atoms on the fine clock
   int fine_index;                     // fine steps done in the current coarse step
   double elapsed;                     // time elapsed in the current coarse step
   double counts[3];                   // global number of slow, mixed, fast atoms
@@ -107,6 +110,7 @@ class FixPEJumpAsync : public FixPEJump {
   bool replaced_forces_exact() const override;
   bool can_reverse() const override;
 
+  void assign_buffer();
   void find_slow();
   void find_moving();
   void slow_magnitudes();

@@ -38,6 +38,9 @@ namespace PEJump {
     InteractionSplit(class LAMMPS *, int groupbit, int finebit);
     ~InteractionSplit() override;
 
+    // the atoms on the fine clock: those of the group with this group bit
+    void set_fine_bit(int bit) { finebit = bit; }
+
     // 1 if atom i (owned or ghost) is integrated on the fine clock
     int fine(int i) const;
     // 1 if atom i (owned or ghost) is integrated on the coarse clock

@@ -165,6 +165,37 @@ inline void lj_liquid(Sim &s, int cells = 4, const std::string &extra_velocity =
           "neigh_modify every 1 delay 0 check yes"});
 }
 
+// the paper's inhomogeneous wave u_tt = (c^2 u_x)_x on (0,1), u = 0 at the
+// ends, c = 10 for x <= 1/2 and 1 beyond, on n intervals of length dx = 1/n
+// with unit masses: site i = atom i+1 at x = i + u_i, the spring between
+// sites i-1 and i has K = c^2/(2 dx^2) (bond type 1 stiff, 2 soft). Groups:
+// ends (sites 0, n), chain (the others), fast (sites 1..n/2: x_i <= 1/2).
+// Initial values: the right-going pulse u0 = 1e-2 exp(-(20(x-0.2))^2),
+// v0 = -c u0' on (0, 1/2)
+inline void inhomogeneous_wave(Sim &s, int n)
+{
+  const double dx = 1.0 / n;
+  s.cmds({"units lj", "atom_style bond", "atom_modify map array", "boundary f f f",
+          "region box block -1 " + std::to_string(n + 1) + " -5 5 -5 5",
+          "create_box 1 box bond/types 2 extra/bond/per/atom 2", "mass 1 1.0"});
+  for (int i = 0; i <= n; ++i) s.cmd("create_atoms 1 single " + std::to_string(i) + " 0 0");
+  for (int i = 1; i < n; ++i) {
+    const double x = i * dx;
+    const double g = (x < 0.5) ? 1.0e-2 * std::exp(-std::pow(20.0 * (x - 0.2), 2)) : 0.0;
+    const int j = s.lmp->atom->map(i + 1);
+    s.lmp->atom->x[j][0] = i + g;
+    s.lmp->atom->v[j][0] = 10.0 * 800.0 * (x - 0.2) * g;
+  }
+  s.cmds({"bond_style harmonic", "bond_coeff 1 " + std::to_string(50.0 / (dx * dx)) + " 1.0",
+          "bond_coeff 2 " + std::to_string(0.5 / (dx * dx)) + " 1.0"});
+  for (int i = 1; i <= n; ++i)
+    s.cmd(fmt::format("create_bonds single/bond {} {} {}", ((i - 0.5) * dx <= 0.5) ? 1 : 2, i,
+                      i + 1));
+  s.cmds({"pair_style zero 1.5", "pair_coeff * *", "comm_modify cutoff 3.0",
+          fmt::format("group ends id 1 {}", n + 1), "group chain subtract all ends",
+          fmt::format("group fast id 2:{}", n / 2 + 1)});
+}
+
 }    // namespace PEJumpTest
 
 #endif

@@ -232,6 +232,14 @@ TEST(PEJumpAsync, SecondOrderInCoarseStepAndAtFixedRatio)
   const double p2 = order(hs2, err2);
   std::cout << "order at h_S/h_F = 25: " << p2 << "\n";
   EXPECT_NEAR(p2, 2.0, 0.1);
+
+  // a buffer layer changes the partition, not the order
+  std::vector<double> err3;
+  for (double h : hs2)
+    err3.push_back(max_diff(exact, chain_at(T, h / 25, 25, "lobatto 5 buffer 1")));
+  const double p3 = order(hs2, err3);
+  std::cout << "order at h_S/h_F = 25 with buffer 1: " << p3 << "\n";
+  EXPECT_NEAR(p3, 2.0, 0.1);
 }
 
 /* ----------------------------------------------------------------------
@@ -346,7 +354,7 @@ TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone)
 
 TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact)
 {
-  for (const std::string rule : {"midpoint", "lobatto 3"}) {
+  for (const std::string rule : {"midpoint", "lobatto 3", "lobatto 3 buffer 1"}) {
     const std::string fix = "fix 1 chain pe_jump/async 20 fast quadrature " + rule;
     std::vector<double> unbroken, split, restarted;
     {
@@ -397,6 +405,10 @@ TEST(PEJumpAsync, BadInputGivesClearErrors)
                                          "group empty type 3",
                                          "group one id 1"};
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 0 fast"), ContainsRegex("K >= 1"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast buffer -1"),
+              ContainsRegex("buffer needs N >= 0"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump buffer 1"),
+              ContainsRegex("buffer keyword belongs to fix pe_jump/async"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5"),
               ContainsRegex("Illegal fix pe_jump/async command: missing argument"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 nosuchgroup"),
@@ -495,6 +507,77 @@ TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected)
     EXPECT_THAT(what, ContainsRegex("is unstable at step [0-9]+"));
     EXPECT_THAT(what, ContainsRegex("the coarse step 0.3 \\(slow atoms\\)"));
     EXPECT_THAT(out, ::testing::Not(ContainsRegex("[^a-z](nan|inf)[^a-z]")));
+  }
+}
+
+/* ----------------------------------------------------------------------
+   buffer N: N layers of slow partners join the fine clock
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, BufferLayersJoinTheFineClock)
+{
+  for (int layers : {1, 2}) {
+    Sim s;
+    chain(s);
+    s.cmds({fmt::format("fix 1 chain pe_jump/async 10 fast buffer {}", layers), "timestep 1e-3",
+            "thermo 0", "run 0 post no"});
+    // q_1..q_3 were fast (q_3 mixed), q_4..q_6 slow: each layer moves the
+    // interface one atom on
+    EXPECT_EQ(s.vec("1", 6), 3.0 - layers);    // slow
+    EXPECT_EQ(s.vec("1", 7), 1.0);             // mixed
+    EXPECT_EQ(s.vec("1", 8), 2.0 + layers);    // fast
+    const double *klass = s.lmp->modify->get_fix_by_id("1")->vector_atom;
+    for (int id = 2; id <= 7; ++id) {
+      const int q = id - 1;    // chain coordinate q_1..q_6
+      const double expected = (q < 3 + layers) ? 2 : ((q == 3 + layers) ? 1 : 0);
+      EXPECT_EQ(klass[s.lmp->atom->map(id)], expected) << layers << " " << id;
+    }
+    EXPECT_GE(s.lmp->group->find("1_fine_clock"), 0);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   the paper's wave setting h_S = dx, K = 10 resonates at the interface
+   (the period-2 mode of the first slow atom grows 5.4 % per coarse step);
+   with one buffer layer it is stable and keeps the pseudo-energy
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, BufferRemovesTheInterfaceResonanceOfTheWave)
+{
+  constexpr int N = 250;
+  auto wave = [](Sim &s, const std::string &extra) {
+    inhomogeneous_wave(s, N);
+    s.cmds({"compute epot all pe", "fix 1 chain pe_jump/async 10 fast" + extra,
+            fmt::format("timestep {:.17g}", 0.1 / N), "variable Ht equal c_epot+f_1",
+            "thermo_style custom step c_epot f_1 f_1[2] v_Ht", "thermo 10"});
+  };
+  {
+    Sim s;
+    wave(s, "");
+    std::string what;
+    try {
+      s.cmd("run 20000 post no");
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      what = e.what();
+    }
+    EXPECT_THAT(what, ContainsRegex("is unstable at step [0-9]+"));
+  }
+  {
+    Sim s;
+    wave(s, " buffer 1");
+    s.cmd("run 0 post no");
+    const double ht0 = s.eval("v_Ht");
+    double jfirst = 0.0, jlast = 0.0, dht = 0.0;
+    for (int block = 0; block < 20; ++block) {
+      s.cmd("run 1000 post no");    // coarse nodes: multiples of K
+      const double j = s.vec("1", 1);
+      if (block < 2) jfirst = std::max(jfirst, j);
+      if (block >= 18) jlast = std::max(jlast, j);
+      dht = std::max(dht, std::fabs(s.eval("v_Ht") - ht0) / std::fabs(ht0));
+    }
+    EXPECT_GT(jfirst, 0.0);
+    EXPECT_LT(jlast, 2.0 * jfirst);    // no growth over 2000 coarse steps
+    EXPECT_LT(dht, 1e-8);
   }
 }
 
