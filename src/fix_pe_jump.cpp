@@ -1073,10 +1073,11 @@ bool FixPEJump::can_reverse() const
 
 std::string FixPEJump::instability_advice() const
 {
-  return fmt::format("The time step {} is beyond the stability limit (for masses m joined by "
-                     "springs of stiffness k in a chain, dt < sqrt(m/k); bond_style harmonic has "
-                     "k = 2K): reduce it{}",
-                     h_step, adapt ? "" : ", or use the adapt keyword");
+  return fmt::format(
+      "The time step {} is beyond the stability limit of the fastest motion (for "
+      "masses m joined by springs of stiffness k in a chain, dt < sqrt(m/k); "
+      "bond_style harmonic has k = 2K): {}",
+      h_step, adapt ? "lower the adapt dtmin or eps" : "reduce it, or use the adapt keyword");
 }
 
 /* ----------------------------------------------------------------------

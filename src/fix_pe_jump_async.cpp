@@ -407,8 +407,11 @@ std::string FixPEJumpAsync::instability_advice() const
   return fmt::format("The fine step {} (fast and mixed atoms), the coarse step {} (slow atoms), or "
                      "their coupling at the interface, which has resonances (see the stability "
                      "section of the fix pe_jump/async documentation), is unstable: reduce the "
-                     "time step or change K",
-                     h_step, nfine * h_step);
+                     "time step or change K{}",
+                     h_step, nfine * h_step,
+                     buffer_layers ? ""
+                                   : ", or add the keyword buffer 1 (the slow partners of "
+                                     "the interface then take the fine step)");
 }
 
 /* ----------------------------------------------------------------------
