@@ -13,6 +13,9 @@ Stages (in this order):
   lattice    work-precision, 2d spring lattice with a stiff inclusion (K = 50)
   lj_wp      work-precision, LJ liquid
   dtreset    variable steps under fix dt/reset: energy against time
+  skip       what the fixes skip: energy/virial without output, the Lobatto
+             start node, the Verlet loop's evaluation as a node, slow
+             interactions on fine steps (counts and timings)
   profile    perf profiles of the fixes (needs perf)
   retime     reruns lj_cost (and mpi) if they ran on a noisy machine
 Then bench/report.py writes doc/benchmarks.md and the plots.
@@ -41,6 +44,8 @@ FULL = dict(
     lat_nx=120, lat_ny=140, lat_T=2.0, lat_h=[0.004, 0.002, 0.001], lat_reps=3,
     ljwp_ncell=20, ljwp_T=0.5, ljwp_h=[0.01, 0.005, 0.0025], ljwp_reps=3,
     dt_fpu_T=200.0, dt_lj_ncell=10, dt_lj_T=50.0,
+    skip_lj_steps=100, skip_reps=3, skip_h=0.002, skip_K=[1, 5, 10, 50],
+    skip_chain_copies=12500, skip_chain_steps=1000, skip_lat_nx=120, skip_lat_ny=140, skip_lat_steps=1000,
     quiet_wait=600,
 )
 QUICK = dict(
@@ -53,6 +58,8 @@ QUICK = dict(
     lat_nx=60, lat_ny=70, lat_T=2.0, lat_h=[0.004, 0.002], lat_reps=1,
     ljwp_ncell=10, ljwp_T=0.5, ljwp_h=[0.01, 0.005], ljwp_reps=1,
     dt_fpu_T=50.0, dt_lj_ncell=6, dt_lj_T=20.0,
+    skip_lj_steps=100, skip_reps=3, skip_h=0.002, skip_K=[1, 5, 10, 50],
+    skip_chain_copies=1250, skip_chain_steps=500, skip_lat_nx=60, skip_lat_ny=70, skip_lat_steps=500,
     quiet_wait=30,
 )
 
@@ -359,20 +366,31 @@ def stage_string(ctx, tag="string"):
 
 # slow/fast chain: copies of the paper's chain --------------------------------
 
-def stage_chain(ctx, tag="chain"):
-    c = ctx.cfg
-    wd = ctx.wdir(tag)
-    a, om2, M = 5.0, 2500.0, 16
-    springs = "KKKQQQQ"
+CHAIN_A, CHAIN_OM2, CHAIN_SPRINGS = 5.0, 2500.0, "KKKQQQQ"
+
+
+def write_chain_scene(wd, ncop, M=16):
+    """soft.table and chain.data of ncop copies of the paper's slow/fast
+    chain (stiff springs omega^2 = 2500), cycling through M random initial
+    states; returns the counts of write_chain_data and the M variants."""
+    a, om2, springs = CHAIN_A, CHAIN_OM2, CHAIN_SPRINGS
     rng = np.random.default_rng(2024)
     amp_fast = 0.2 * math.sqrt(10.0 / om2)
     variants = [(springs, np.r_[rng.uniform(-1, 1, 3) * amp_fast, 0, 0, 0],
                  np.r_[0, 0, 0, rng.uniform(-0.5, 0.5, 3)]) for _ in range(M)]
-    ncop = c["chain_copies"]
     B.write_table(os.path.join(wd, "soft.table"), "SOFT", lambda r: (r - a) ** 4,
                   lambda r: -4 * (r - a) ** 3, 1.0, 7.0)
     counts = B.write_chain_data(os.path.join(wd, "chain.data"),
                                 [variants[k % M] for k in range(ncop)], a=a)
+    return counts, variants
+
+
+def stage_chain(ctx, tag="chain"):
+    c = ctx.cfg
+    wd = ctx.wdir(tag)
+    a, om2, M = CHAIN_A, CHAIN_OM2, 16
+    ncop = c["chain_copies"]
+    counts, variants = write_chain_scene(wd, ncop, M)
     T = c["chain_T"]
     refs = np.array([B.chain_reference(s, q, p, T, om2)[0] for (s, q, p) in variants])
     refmat = refs[np.arange(ncop) % M]
@@ -611,6 +629,162 @@ def stage_dtreset(ctx, tag="dtreset"):
     ctx.save(tag, out)
 
 
+# skip what a scene does not need -------------------------------------------------
+
+SKIP_LJ_RULES = [("nve", None), ("pe_jump", "midpoint"), ("pe_jump", "lobatto 2"), ("pe_jump", "lobatto 3"),
+                 ("pe_jump", "lobatto 5"), ("pe_jump", "legendre 2"), ("pe_jump", "legendre 3")]
+
+
+def rule_evals(quad):
+    """(nodes, force evaluations per step by the doc's cost table) of a rule:
+    lobatto N reuses its start node, the others evaluate every node."""
+    if quad == "midpoint":
+        return 1, 1
+    kind, n = quad.split()
+    n = int(n)
+    return n, (n - 1 if kind == "lobatto" else n)
+
+
+def chain_fine_fraction(springs, ncop):
+    """Fraction of the interactions (bonds + neighbor pairs) of the chain
+    scene that involve a fine-clock atom (type 2: touches a stiff spring).
+    Spring j joins atoms j and j+1 (0 and len(springs) are the walls, which
+    are not integrated); only nearest neighbours are within rc + skin."""
+    n = len(springs) - 1
+    fast = [False] + [springs[i - 1] == "K" or springs[i] == "K" for i in range(1, n + 1)] + [False]
+    fine = sum(1 for j in range(len(springs)) if fast[j] or fast[j + 1])
+    return {"fine": fine * ncop, "all": len(springs) * ncop,
+            "pairs": sum(1 for x in springs if x == "Q") * ncop}
+
+
+def lattice_fine_fraction(path, nx, ny):
+    """Same for the lattice of benchlib.write_lattice_data (atom a = i*ny + j,
+    nearest neighbours only): bonds join two inclusion atoms, soft springs
+    are fine if one end is in the inclusion (type 2)."""
+    with open(path) as f:
+        lines = f.read().split("Atoms # bond\n\n")[1].split("\n\nVelocities")[0].splitlines()
+    inc = np.zeros(nx * ny, bool)
+    for ln in lines:
+        p = ln.split()
+        inc[int(p[0]) - 1] = p[2] == "2"
+    fine = allc = pairs = 0
+    for i in range(nx):
+        for j in range(ny):
+            a = i * ny + j
+            if j % 2:
+                nbrs = [((i + 1) % nx, j), (i, (j + 1) % ny), ((i + 1) % nx, (j + 1) % ny)]
+            else:
+                nbrs = [((i + 1) % nx, j), ((i - 1) % nx, (j + 1) % ny), (i, (j + 1) % ny)]
+            for (k, l) in nbrs:
+                b = k * ny + l
+                allc += 1
+                fine += int(inc[a] or inc[b])
+                pairs += int(not (inc[a] and inc[b]))
+    return {"fine": fine, "all": allc, "pairs": pairs}
+
+
+def stage_skip(ctx, tag="skip"):
+    """Counts and timings of what the fixes skip: energy/virial on steps
+    without output, the Lobatto start node, the Verlet loop's own evaluation
+    as a node, slow interactions on fine steps (pe_jump/async)."""
+    c = ctx.cfg
+    wd = ctx.wdir(tag)
+    out = {"reps": c["skip_reps"]}
+    # (1) + (2): LJ liquid, output at the end only or at every step
+    N = c["skip_lj_steps"]
+    st0 = quiet_state(ctx, "before", long_wait=True)
+    configs = [{"name": f"{rule_name(i, q)} thermo {th}", "rule": rule_name(i, q), "integ": i, "quad": q,
+                "thermo": th} for i, q in SKIP_LJ_RULES for th in ("end", "every")]
+
+    def lj_runner(cf, rep):
+        v = {"ncell": c["lj_ncell"], "nsteps": N, "integrator": cf["integ"],
+             "nthermo": N if cf["thermo"] == "end" else 1}
+        if cf["quad"]:
+            v["quad"] = cf["quad"]
+        r = B.run_lammps(os.path.join(INP, "in.lj"), v, cwd=wd,
+                         log=f"log.lj.{cf['name'].replace(' ', '_')}.{rep}")
+        log(f"  {cf['name']:34s} rep {rep}: loop {r['loop_time']:.3f} s, evals {r['bench']['evals']:.1f}, "
+            f"CPU {r.get('cpu_use')}%")
+        return r
+    runs = repeat_runs(configs, c["skip_reps"], lj_runner)
+    st1 = quiet_state(ctx, "after")
+    table = []
+    for cf in configs:
+        rs = runs[cf["name"]]
+        s = summarize_times(rs)
+        r0 = rs[0]
+        ev = np.array([row[r0["thermo_head"].index("v_evals")] for row in r0["thermo_rows"]])
+        inc = np.diff(ev)       # per output interval: per step with thermo every
+        nodes, expect = rule_evals(cf["quad"]) if cf["quad"] else (1, 1)
+        s.update(name=cf["name"], rule=cf["rule"], integ=cf["integ"], quad=cf["quad"], thermo=cf["thermo"],
+                 steps=r0["steps"], natoms=r0["natoms"], evals=r0["bench"]["evals"],
+                 outputs=len(ev) - 1, inc_min=float(inc.min()), inc_max=float(inc.max()),
+                 nodes=nodes, expect=expect, neigh_builds=r0.get("neigh_builds"))
+        table.append(s)
+    out["lj"] = {"table": table, "quiet": [st0, st1], "ncell": c["lj_ncell"], "steps": N}
+    # (3) async over K against sync on the slow/fast chain and the lattice
+    st0 = quiet_state(ctx, "before")
+    scenes = {}
+    cwd = ctx.wdir(tag + "/chain")
+    counts, _ = write_chain_scene(cwd, c["skip_chain_copies"])
+    T = c["skip_chain_steps"] * c["skip_h"]
+    scenes["chain"] = dict(wd=cwd, counts=counts, frac=chain_fine_fraction(CHAIN_SPRINGS, c["skip_chain_copies"]),
+                           base=dict(data="chain.data", table="soft.table", rc=7.0, skin=1.0, a=CHAIN_A,
+                                     Kb=CHAIN_OM2 / 4, T=T, nsample=1),
+                           steps=c["skip_chain_steps"])
+    lwd = ctx.wdir(tag + "/lattice")
+    ks, ratio = 0.5, 2500.0
+    B.write_table(os.path.join(lwd, "soft.table"), "SOFT", lambda r: ks * (r - 1) ** 2,
+                  lambda r: -2 * ks * (r - 1), 0.3, 1.4)
+    nx, ny = c["skip_lat_nx"], c["skip_lat_ny"]
+    info = B.write_lattice_data(os.path.join(lwd, "lattice.data"), nx, ny)
+    T = c["skip_lat_steps"] * c["skip_h"]
+    scenes["lattice"] = dict(wd=lwd, counts=info, frac=lattice_fine_fraction(os.path.join(lwd, "lattice.data"), nx, ny),
+                             base=dict(data="lattice.data", table="soft.table", rc=1.3, skin=0.2, a=1.0,
+                                       Kb=ratio * ks, bnd="p p p", procs="* * 1", T=T, nsample=1),
+                             steps=c["skip_lat_steps"])
+    methods = [dict(integ="pe_jump", quad="midpoint", K=None, label="pe_jump midpoint (sync)")]
+    methods += [dict(integ="async", quad="midpoint", K=k, label=f"async K={k}") for k in c["skip_K"]]
+    methods += [dict(integ="pe_jump", quad="lobatto 3", K=None, label="pe_jump lobatto 3 (sync)"),
+                dict(integ="async", quad="lobatto 3", K=10, label="async K=10 lobatto 3")]
+    configs = [dict(m, scene=sc, h=c["skip_h"], name=f"{sc} {m['label']}") for sc in scenes for m in methods]
+
+    def as_runner(cf, rep):
+        sc = scenes[cf["scene"]]
+        label = cf["name"].replace(" ", "_").replace("=", "").replace("(", "").replace(")", "")
+        r = springs_run(sc["wd"], sc["base"], cf, rep, label)
+        log(f"  {cf['name']:40s} rep {rep}: loop {r['loop_time']:.4f} s, evals {r['bench']['evals']:.4f}")
+        return r
+    runs = repeat_runs(configs, c["skip_reps"], as_runner)
+    st2 = quiet_state(ctx, "after")
+    atab = []
+    for cf in configs:
+        rs = runs[cf["name"]]
+        s = summarize_times(rs)
+        r0 = rs[0]
+        sc = scenes[cf["scene"]]
+        fr = sc["frac"]
+        f = fr["fine"] / fr["all"]
+        nodes, per = rule_evals(cf["quad"])
+        n = r0["steps"]
+        outputs = len(r0["thermo_rows"]) - 1        # thermo at the end: energy tallied once
+        if cf["integ"] == "async":
+            pred_step = per * (f + (1.0 - f) / cf["K"])
+            extra = outputs * 1.0                   # every rule: all interactions once more
+        else:
+            pred_step = per
+            extra = outputs * (0.0 if cf["quad"].startswith("lobatto") else 1.0)
+        s.update(name=cf["name"], scene=cf["scene"], label=cf["label"], integ=cf["integ"], quad=cf["quad"],
+                 K=cf["K"], h=cf["h"], steps=n, natoms=r0["natoms"], evals=r0["bench"]["evals"],
+                 neighbors=r0.get("neighbors"), f_fine=f, pred_per_step=pred_step, outputs=outputs,
+                 pred_evals=n * pred_step + extra, pred_extra=extra)
+        atab.append(s)
+    out["async"] = {"table": atab, "quiet": [st0, st2], "h": c["skip_h"],
+                    "scenes": {k: {"counts": v["counts"], "frac": v["frac"], "steps": v["steps"]}
+                               for k, v in scenes.items()}}
+    ctx.save(tag, out)
+
+
 # perf profiles ------------------------------------------------------------------------
 
 def stage_profile(ctx, tag="profile"):
@@ -690,7 +864,8 @@ def stage_retime(ctx):
             B.save_json(path, d)
 
 
-STAGES = ["lj_cost", "mpi", "fpu", "string", "chain", "wave", "lattice", "lj_wp", "dtreset", "profile", "retime"]
+STAGES = ["lj_cost", "mpi", "fpu", "string", "chain", "wave", "lattice", "lj_wp", "dtreset", "skip", "profile",
+          "retime"]
 
 
 def main():
