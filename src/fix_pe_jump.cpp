@@ -623,11 +623,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   const double kick = (init_style == INIT_KICK) ? force->ftm2v : 0.0;
 
   for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) {
-      // not integrated: defined values for the exchange and restart buffers
-      for (int k = 0; k < 3; k++) vhalf[i][k] = jump[i][k] = 0.0;
-      continue;
-    }
+    if (!(mask[i] & groupbit)) continue;
     const double dtfm = kick * kick_step(i) / (rmass ? rmass[i] : mass[type[i]]);
     for (int k = 0; k < 3; k++) {
       jump[i][k] = dtfm * f[i][k];

@@ -99,11 +99,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
 
   nstate += 5 + (rule->has_end_nodes() ? 3 : 0);
   FixPEJumpAsync::grow_arrays(atom->nmax);
-  for (int i = 0; i < atom->nlocal; i++) {
-    klass[i] = OUTSIDE;
-    tpos[i] = CURRENT;
-    for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
-  }
+  for (int i = 0; i < atom->nlocal; i++) FixPEJumpAsync::set_arrays(i);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -210,9 +206,7 @@ void FixPEJumpAsync::assign_buffer()
   for (int layer = 0; layer < buffer_layers; layer++) {
     split->build();
     split->mark_fine_participants(participant);
-    reverse_flags = &participant;
-    comm->reverse_comm(this, 1);
-    reverse_flags = nullptr;
+    gather_flags(participant);
     for (int i = 0; i < atom->nlocal; i++)
       if (participant[i] && (mask[i] & groupbit)) mask[i] |= clockbit;
     comm->forward_comm(this);
@@ -243,9 +237,7 @@ void FixPEJumpAsync::post_neighbor()
 void FixPEJumpAsync::find_moving()
 {
   split->mark_fine_participants(participant);
-  reverse_flags = &participant;
-  comm->reverse_comm(this, 1);
-  reverse_flags = nullptr;
+  gather_flags(participant);
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
@@ -350,10 +342,9 @@ void FixPEJumpAsync::setup(int vflag)
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
-  find_slow();
-  find_moving();
   FixPEJump::setup(vflag);
   slow_magnitudes();
+  comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
   label_classes();
 }
 
@@ -646,7 +637,9 @@ void FixPEJumpAsync::final_integrate()
   if (coarse_end) {
     fine_index = 0;
     elapsed = 0.0;
-    label_classes();
+    // the labels are output only: take them where something looks, when
+    // tally_at_node() has brought the ghosts to the node
+    if (eflag_step || vflag_step || step_observed()) label_classes();
   } else {
     ++fine_index;
     elapsed = coarse_step;
@@ -654,18 +647,16 @@ void FixPEJumpAsync::final_integrate()
 }
 
 /* ----------------------------------------------------------------------
-   at a coarse node: slow = in the group, not in the fast group; mixed =
-   fast-group atom that shares an interaction with a slow atom; fast = the
-   other fast-group atoms. Also the global counts of the three classes.
+   at a coarse node, with the ghosts at the node: slow = on the coarse
+   clock; mixed = fine-clock atom that shares an interaction with a slow
+   atom; fast = the other fine-clock atoms. Also the global counts of the
+   three classes.
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::label_classes()
 {
-  comm->forward_comm();
   split->mark_interface(interface_flag);
-  reverse_flags = &interface_flag;
-  comm->reverse_comm(this, 1);
-  reverse_flags = nullptr;
+  gather_flags(interface_flag);
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
@@ -680,6 +671,17 @@ void FixPEJumpAsync::label_classes()
     if (klass[i] != OUTSIDE) local[static_cast<int>(klass[i])] += 1.0;
   }
   MPI_Allreduce(local, counts, 3, MPI_DOUBLE, MPI_SUM, world);
+}
+
+/* ----------------------------------------------------------------------
+   flags set on ghost atoms are set on their owners too
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::gather_flags(std::vector<int> &flags)
+{
+  reverse_flags = &flags;
+  comm->reverse_comm(this, 1);
+  reverse_flags = nullptr;
 }
 
 /* ----------------------------------------------------------------------

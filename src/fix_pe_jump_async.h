@@ -118,6 +118,7 @@ class FixPEJumpAsync : public FixPEJump {
   void catch_up_all();
   void coarse_quadrature_sum(double coarse_step);
   void label_classes();
+  void gather_flags(std::vector<int> &);
 };
 
 }    // namespace LAMMPS_NS
