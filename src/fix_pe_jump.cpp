@@ -28,6 +28,7 @@
 #include "force.h"
 #include "memory.h"
 #include "modify.h"
+#include "neigh_list.h"
 #include "neighbor.h"
 #include "output.h"
 #include "pair.h"
@@ -44,13 +45,14 @@ using namespace FixConst;
 using PEJump::ForceSampler;
 using PEJump::Quadrature;
 
-static constexpr double ADAPT_GROWTH = 1.05;    // largest step growth factor per step
-static constexpr double ADAPT_SAFETY = 0.5;     // aim at this fraction of the bound
-static constexpr double BLOWUP = 1.0e300;       // stands for a non-finite value in reductions
-static constexpr double STOP_GROWTH = 1.0e6;    // jump growth that is always instability
-static constexpr double HINT_GROWTH = 2.0;      // ... that is instability if atoms move far
-static constexpr int ADAPT_SAMPLES = 64;        // trial steps between dtmax and dtmin
-static constexpr int ADAPT_BISECT = 40;         // bisections of the largest admissible step
+static constexpr double ADAPT_GROWTH = 1.05;        // largest step growth factor per step
+static constexpr double ADAPT_SAFETY = 0.5;         // aim at this fraction of the bound
+static constexpr double BLOWUP = 1.0e300;           // stands for a non-finite value in reductions
+static constexpr double STOP_GROWTH = 1.0e6;        // jump growth that is always instability
+static constexpr double HINT_GROWTH = 2.0;          // ... that is instability if atoms move far
+static constexpr int ADAPT_SAMPLES = 64;            // trial steps between dtmax and dtmin
+static constexpr int ADAPT_BISECT = 40;             // bisections of the largest admissible step
+static constexpr double AUTO_DAMP_STEPS = 100.0;    // damp auto: parasitic damping time in steps
 
 /* ---------------------------------------------------------------------- */
 
@@ -72,6 +74,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   adapt = 0;
   adapt_eps = adapt_dtmin = adapt_dtmax = 0.0;
   compensate = two_clocks ? 0 : 1;
+  damp_time = -1.0;
   buffer_layers = 0;
   auto_tol = 0.0;
   auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
@@ -135,6 +138,15 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
                    style);
       buffer_layers = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
       if (buffer_layers < 0) error->all(FLERR, "Fix {} buffer needs N >= 0", style);
+      iarg += 2;
+    } else if (strcmp(arg[iarg], "damp") == 0) {
+      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " damp", error);
+      if (strcmp(arg[iarg + 1], "auto") == 0)
+        damp_time = -1.0;
+      else
+        damp_time = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
+      if ((damp_time != -1.0) && !(damp_time >= 0.0))
+        error->all(FLERR, "Fix {} damp needs a time >= 0 or auto", style);
       iarg += 2;
     } else if (strcmp(arg[iarg], "compensate") == 0) {
       if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " compensate", error);
@@ -201,6 +213,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 
   FixPEJump::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
+  fresh_atoms = 0;
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
 }
@@ -260,33 +273,114 @@ void FixPEJump::init()
     error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
                atom->atom_style);
 
-  // the force at the primary node is weighted by its quadrature weight, but
-  // forces of other fixes and of contributions that are not sampled act with
-  // weight 1, so the primary node force must then be split
+  sort_other_fixes();
+
+  // forces that the rule does not integrate (other fixes that add forces,
+  // contributions left out by sample) act as impulses at the primary node:
+  // the force there is split into the sampled part and the rest. The
+  // impulse must sit at the centre of the step or at its end, so an even
+  // Gauss-Legendre rule then gets the centre as an extra node
 
   const int present = sampler->present();
-  const bool remainder = (modify->n_post_force_any > 0) || ((sample_mask & present) != present);
-  const int p = rule->primary();
-  split_primary = remainder && ((rule->weight[p] != 1.0) || rule->has_end_nodes());
+  split_primary = !adders.empty() || ((sample_mask & present) != present);
   use_copy = split_primary && ((sample_mask & present) == present);
+  const bool centre = split_primary && (rule->family() == Quadrature::LEGENDRE) &&
+      (rule->points() % 2 == 0) && (auto_tol == 0.0);
+  if (centre != (rule->size() != rule->points())) {
+    auto *other = new Quadrature(rule->family(), rule->points(), centre);
+    delete rule;
+    rule = other;
+  }
+  // other fixes that add forces (thermostats above all) drive the
+  // parasitic period-2 mode, which the scheme does not damp: damp it over
+  // damp_time (auto: AUTO_DAMP_STEPS steps when such fixes are present)
+  damp_rate = 0.0;
+  if (damp_time > 0.0)
+    damp_rate = 1.0 / damp_time;
+  else if ((damp_time < 0.0) && !adders.empty())
+    damp_rate = 1.0 / (AUTO_DAMP_STEPS * update->dt);
   if (id_pe) {
     c_pe = modify->get_compute_by_id(id_pe);
     if (!c_pe) error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
   }
-  // forces of other fixes enter with weight 1 at the primary node: fixes
-  // that replace forces hold atoms only where that is the whole quadrature
-  if (!replaced_forces_exact() && (comm->me == 0))
-    for (const auto &ifix : modify->get_fix_list())
-      if (utils::strmatch(ifix->style, "^setforce") || utils::strmatch(ifix->style, "^aveforce") ||
-          utils::strmatch(ifix->style, "^freeze") || utils::strmatch(ifix->style, "^lineforce") ||
-          utils::strmatch(ifix->style, "^planeforce"))
-        error->warning(FLERR,
-                       "Fix {} replaces forces, but fix {} with quadrature {} adds the forces of "
-                       "other fixes to those it samples: it does not hold the atoms of fix {}. "
-                       "Leave them out of the group of fix {}",
-                       ifix->style, style, rule->name(), ifix->id, id);
   if (present && !(sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
+}
+
+/* ----------------------------------------------------------------------
+   other fixes that act on the forces: those that replace or project them
+   act at every quadrature node (projections), those that add forces act
+   once per step as impulses (adders). Constraints are refused, other time
+   integrators are remembered for the interaction check
+------------------------------------------------------------------------- */
+
+void FixPEJump::sort_other_fixes()
+{
+  std::vector<Fix *> projections;
+  adders.clear();
+  others_bits = 0;
+  for (auto *ifix : modify->get_fix_list()) {
+    if (ifix == this) continue;
+    if (ifix->time_integrate) {
+      others_bits |= ifix->groupbit;
+      continue;
+    }
+    if (ifix->dof_flag)
+      error->all(FLERR,
+                 "Fix {} cannot be combined with the constraints of fix {} ({}): they assume the "
+                 "velocity Verlet update of fix nve. Use fix nve, or remove the constraints",
+                 style, ifix->id, ifix->style);
+    if (!(ifix->setmask() & POST_FORCE)) continue;
+    if (utils::strmatch(ifix->style, "^setforce") || utils::strmatch(ifix->style, "^aveforce") ||
+        utils::strmatch(ifix->style, "^freeze") || utils::strmatch(ifix->style, "^lineforce") ||
+        utils::strmatch(ifix->style, "^planeforce") || utils::strmatch(ifix->style, "^enforce2d"))
+      projections.push_back(ifix);
+    else
+      adders.push_back(ifix);
+  }
+  sampler->set_projections(projections);
+}
+
+/* ----------------------------------------------------------------------
+   atoms of another time integrator (fix nve, fix rigid, a second fix
+   pe_jump) sit at the end of the step when forces are computed. Forces
+   between them and this fix's atoms are consistent only if every node of
+   the rule is a step end (lobatto 2); otherwise refuse interactions
+   between the two sets. Checked at setup and after each list build.
+------------------------------------------------------------------------- */
+
+void FixPEJump::check_other_integrators()
+{
+  if (!others_bits || ((rule->family() == Quadrature::LOBATTO) && (rule->size() == 2))) return;
+
+  const int *mask = atom->mask;
+  const auto cross = [&](int i, int j) {
+    return ((mask[i] & groupbit) && (mask[j] & others_bits)) ||
+        ((mask[i] & others_bits) && (mask[j] & groupbit));
+  };
+  int local = 0;
+  for (int n = 0; (n < neighbor->nlist) && !local; n++) {
+    const NeighList *list = neighbor->lists[n];
+    if (!list || !list->numneigh || list->kokkos) continue;
+    for (int ii = 0; (ii < list->inum) && !local; ii++) {
+      const int i = list->ilist[ii];
+      for (int jj = 0; jj < list->numneigh[i]; jj++)
+        if (cross(i, list->firstneigh[i][jj] & NEIGHMASK)) local = 1;
+    }
+  }
+  if (atom->molecular != Atom::ATOMIC)
+    for (int n = 0; (n < neighbor->nbondlist) && !local; n++)
+      if (cross(neighbor->bondlist[n][0], neighbor->bondlist[n][1])) local = 1;
+  int global = 0;
+  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
+  if (global)
+    error->all(FLERR,
+               "Fix {} with quadrature {} evaluates forces inside the step, but atoms of another "
+               "time integrator interact with its atoms at step {}: their positions are those "
+               "of the step end, so the forces between the two sets would mix times. Use "
+               "quadrature lobatto 2 (forces at the step ends only), or integrate all "
+               "interacting atoms with one fix {}",
+               style, rule->name(), update->ntimestep, style);
 }
 
 /* ----------------------------------------------------------------------
@@ -312,6 +406,8 @@ void FixPEJump::setup(int /*vflag*/)
       utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
                      style);
   }
+  refresh_start_nodes();
+  check_other_integrators();
   if (adapt) energy_scale = fabs(pseudo_energy_now());
   if (auto_tol > 0.0) {
     vprev = potential_now(sample_mask);
@@ -337,26 +433,66 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   reinit_pending = 0;
 
   h_step = update->dt;
+  node_impulses();
   if (compensate && (hlast2 > 0.0)) compensate_step_change();
   check_lists();
   advance(rule->node[rule->primary()] * h_step);
 }
 
 /* ----------------------------------------------------------------------
-   free flight of the atoms of the group over time t
+   impulses at the node q^n: a velocity that another fix (or a command
+   between runs that did not restart the scheme) changed since the last
+   step changes the free-flight velocity by the same amount and leaves the
+   jump alone; with a Lobatto rule, forces that the rule does not integrate
+   give the second half of their kick (the first half went into the node
+   velocity at the end of the last step, as in velocity Verlet)
+------------------------------------------------------------------------- */
+
+void FixPEJump::node_impulses()
+{
+  double **v = atom->v;
+  double **f = atom->f;
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const bool half_kick = split_primary && rule->has_end_nodes();
+  const double dth = 0.5 * h_step * force->ftm2v;
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    for (int k = 0; k < 3; k++)
+      if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
+    if (half_kick && !std::isnan(fstart[i][0])) {
+      const double dtfm = dth * inverse_mass_of(i);
+      for (int k = 0; k < 3; k++) vhalf[i][k] += dtfm * (f[i][k] - fstart[i][k]);
+    }
+  }
+}
+
+/* ----------------------------------------------------------------------
+   free flight of the atoms of the group over time t; during the step the
+   velocity seen by other fixes is the free-flight velocity (as with fix
+   nve, whose forces see v^{n+1/2}), and a change they make to it is an
+   impulse there
 ------------------------------------------------------------------------- */
 
 void FixPEJump::advance(double t)
 {
   double **x = atom->x;
+  double **v = atom->v;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   for (int i = 0; i < nlocal; i++)
-    if (mask[i] & groupbit) {
-      x[i][0] += t * vhalf[i][0];
-      x[i][1] += t * vhalf[i][1];
-      x[i][2] += t * vhalf[i][2];
-    }
+    if (mask[i] & groupbit)
+      for (int k = 0; k < 3; k++) {
+        v[i][k] = vhalf[i][k];
+        x[i][k] += t * vhalf[i][k];
+      }
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJump::inverse_mass_of(int i) const
+{
+  return atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]];
 }
 
 /* ----------------------------------------------------------------------
@@ -471,6 +607,14 @@ void FixPEJump::final_integrate()
   grow_work();
   evals_step = 1.0;
 
+  // velocities changed by other fixes during the step (wall/reflect, ...)
+  double **v = atom->v;
+  const int *mask = atom->mask;
+  for (int i = 0; i < atom->nlocal; i++)
+    if (mask[i] & groupbit)
+      for (int k = 0; k < 3; k++)
+        if (v[i][k] != vhalf[i][k]) vhalf[i][k] = v[i][k];
+
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
   const bool direct = (rule->size() == 1) && !split_primary && !adapt;
@@ -486,6 +630,7 @@ void FixPEJump::final_integrate()
   stats_valid = 1;
 
   if (rest != 0.0) tally_at_node();
+  if (others_bits && (neighbor->ago == 0)) check_other_integrators();
   evals_total += evals_step;
   cached_step = -1;
   hlast2 = hlast;
@@ -504,15 +649,31 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
 {
   double **x = atom->x;
   double **v = atom->v;
-  const double *rmass = atom->rmass;
-  const int *type = atom->type;
+  double **f = atom->f;
   const double kick = 2.0 * h_step * force->ftm2v;
   const int keep_start = rule->has_end_nodes();
+  // forces not integrated by the rule: an impulse at the centre of the step
+  // (position Verlet), or at its end node half now and half at the start of
+  // the next step (velocity Verlet)
+  const bool centre_kick = split_primary && !keep_start;
+  const bool end_kick = split_primary && keep_start;
+  // parasitic damping: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps
+  // the smooth jump h a and multiplies the alternating one by -(1 - beta)
+  const double beta = MIN(1.0, damp_rate * fabs(h_step));
   double vv = mag[0], jj = mag[1];
   const auto one = [&](int i) {
+    const double dtfm = kick * inverse_mass_of(i);
+    if (centre_kick)
+      for (int k = 0; k < 3; k++) vhalf[i][k] += 0.5 * dtfm * (f[i][k] - fsample[i][k]);
     for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
-    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
-    two_step_jump(dtfm, favg[i], jump[i], vhalf[i], v[i]);
+    if (beta > 0.0)
+      for (int k = 0; k < 3; k++) jump[i][k] *= 1.0 - beta;
+    two_step_jump((1.0 - 0.5 * beta) * dtfm, favg[i], jump[i], vhalf[i], v[i]);
+    if (end_kick)
+      for (int k = 0; k < 3; k++) {
+        vhalf[i][k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
+        v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
+      }
     for (int k = 0; k < 3; k++) {
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist1) fhist1[i][k] = favg[i][k];
@@ -536,8 +697,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
 
 void FixPEJump::jump_atom(int i, double h, const double *favg)
 {
-  const double dtfm =
-      2.0 * h * force->ftm2v * (atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]]);
+  const double dtfm = 2.0 * h * force->ftm2v * inverse_mass_of(i);
   two_step_jump(dtfm, favg, jump[i], vhalf[i], atom->v[i]);
 }
 
@@ -611,10 +771,14 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
 
   grow_work();
-  if (with_start && rule->has_end_nodes()) store_start_node();
+  if (with_start && rule->has_end_nodes())
+    store_start_node();
+  else if (with_start && split_primary)
+    primary_sampled_force();
 
+  // the jump takes the forces that the rule integrates
   double **v = atom->v;
-  double **f = atom->f;
+  double **f = split_primary ? fsample : atom->f;
   const double *rmass = atom->rmass;
   const double *mass = atom->mass;
   const int *type = atom->type;
@@ -632,10 +796,11 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
     }
   }
 
-  // forces of fixes defined after this one are added after its setup():
-  // redo the initial kick with the complete forces at the first step
+  // fixes defined after this one act on the forces after its setup(): redo
+  // the initial kick with the complete forces at the first step
 
-  reinit_pending = with_start && (init_style == INIT_KICK) && (modify->n_post_force_any > 0);
+  reinit_pending =
+      with_start && (init_style == INIT_KICK) && !split_primary && sampler->has_projections();
   started = 1;
   hlast = hlast2 = 0.0;
   stats_valid = 0;
@@ -686,6 +851,43 @@ void FixPEJump::primary_sampled_force()
     }
     evals_step += sampler->fraction(sample_mask);
   }
+  // at setup, fixes after this one have not yet acted on the forces
+  if (sampler->has_projections() && (split_primary || update->setupflag)) project_sampled();
+}
+
+/* ----------------------------------------------------------------------
+   the force-replacing fixes act on the sampled force at the primary node
+   as they did on the total force there
+------------------------------------------------------------------------- */
+
+void FixPEJump::project_sampled()
+{
+  double **f = atom->f;
+  const size_t nbytes = 3 * sizeof(double) * atom->nlocal;
+  if (!nbytes) {
+    sampler->project();
+    return;
+  }
+  memcpy(&fsave[0][0], &f[0][0], nbytes);
+  memcpy(&f[0][0], &fsample[0][0], nbytes);
+  sampler->project();
+  memcpy(&fsample[0][0], &f[0][0], nbytes);
+  memcpy(&f[0][0], &fsave[0][0], nbytes);
+}
+
+/* ----------------------------------------------------------------------
+   atoms created since the last step (fix deposit, create_atoms) have no
+   start-node force: at setup all start nodes are taken again at q^n, and
+   during a run a new atom's start node is its first primary node
+------------------------------------------------------------------------- */
+
+void FixPEJump::refresh_start_nodes()
+{
+  int any = 0;
+  MPI_Allreduce(&fresh_atoms, &any, 1, MPI_INT, MPI_MAX, world);
+  fresh_atoms = 0;
+  if (!any || !started || !rule->has_end_nodes()) return;
+  store_start_node();
 }
 
 /* ----------------------------------------------------------------------
@@ -710,12 +912,12 @@ void FixPEJump::quadrature_sum()
 
   if (split_primary || reuse_start) primary_sampled_force();
 
+  double **fp = split_primary ? fsample : f;
   const auto start_sum = [&](int i) {
+    if (reuse_start && std::isnan(fstart[i][0]))
+      for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
     for (int k = 0; k < 3; k++) {
-      if (split_primary)
-        fsum[i][k] = wp * fsample[i][k] + (f[i][k] - fsample[i][k]);
-      else
-        fsum[i][k] = wp * f[i][k];
+      fsum[i][k] = wp * fp[i][k];
       if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
     }
   };
@@ -752,6 +954,9 @@ void FixPEJump::auto_quadrature_sum()
   const std::vector<double> &w = rule->weight;
 
   primary_sampled_force();    // F(1) into fsample
+  for (int i = 0; i < nlocal; i++)
+    if ((mask[i] & groupbit) && std::isnan(fstart[i][0]))
+      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
   const double vnew = (update->eflag_global == update->ntimestep) ? sampler->energy(sample_mask)
                                                                   : potential_now(sample_mask);
   const double dv = vnew - vprev;
@@ -801,13 +1006,6 @@ void FixPEJump::auto_quadrature_sum()
     if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
   }
   ++auto_steps[used];
-
-  // forces that are not sampled at the nodes act with weight 1
-  if (split_primary)
-    for (int i = 0; i < nlocal; i++) {
-      if (!(mask[i] & groupbit)) continue;
-      for (int k = 0; k < 3; k++) fsum[i][k] += f[i][k] - fsample[i][k];
-    }
 }
 
 /* ----------------------------------------------------------------------
@@ -1046,16 +1244,6 @@ void FixPEJump::finish_check(const double *local)
                "evaluations of step {}: reduce the time step (or K) or increase the skin",
                style, neighbor->skin, update->ntimestep);
   if (global[0] > limit) next_reneighbor = update->ntimestep;
-}
-
-/* ----------------------------------------------------------------------
-   forces set by other fixes are the step's average only if the single
-   node is the Verlet evaluation itself
-------------------------------------------------------------------------- */
-
-bool FixPEJump::replaced_forces_exact() const
-{
-  return (rule->size() == 1) && (auto_tol == 0.0);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1346,18 +1534,20 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
 }
 
 /* ----------------------------------------------------------------------
-   an atom created during the simulation has no two-step state: a zero one
-   differs from its velocity (if it moves), so the next run restarts the
-   scheme; one created at rest starts without the initial kick
+   an atom created during the simulation (fix deposit, create_atoms) starts
+   with its velocity as free-flight and node velocity and no jump; its
+   start-node force is taken at its first force evaluation (NaN until then)
 ------------------------------------------------------------------------- */
 
 void FixPEJump::set_arrays(int i)
 {
   for (int k = 0; k < 3; k++) {
-    vhalf[i][k] = jump[i][k] = 0.0;
-    if (fstart) fstart[i][k] = 0.0;
+    vhalf[i][k] = atom->v[i][k];
+    jump[i][k] = 0.0;
+    if (fstart) fstart[i][k] = std::nan("");
     if (fhist1) fhist1[i][k] = fhist2[i][k] = 0.0;
   }
+  fresh_atoms = 1;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1413,7 +1603,7 @@ void FixPEJump::global_state(double *list) const
 {
   list[0] = started;
   list[1] = rule->family();
-  list[2] = rule->size();
+  list[2] = rule->points();
   list[3] = evals_total;
   list[4] = hlast;
   list[5] = hlast2;
@@ -1424,8 +1614,8 @@ void FixPEJump::global_state(double *list) const
 void FixPEJump::restart(char *buf)
 {
   auto *list = reinterpret_cast<double *>(buf);
-  const bool same_rule =
-      (static_cast<int>(list[1]) == rule->family()) && (static_cast<int>(list[2]) == rule->size());
+  const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
+      (static_cast<int>(list[2]) == rule->points());
   started = (static_cast<int>(list[0]) != 0) && same_rule;
   evals_total = list[3];
   hlast = list[4];

@@ -96,6 +96,8 @@ class FixPEJump : public Fix {
   double **fhist1, **fhist2;    // per atom: averaged forces of the last two steps
   double hlast, hlast2;         // sizes of the last two steps, 0 if there are none
   int compensate;               // compensate the parasitic jump of step-size changes
+  double damp_time;             // damp keyword: parasitic damping time, -1 auto
+  double damp_rate;             // 1/damping time in use (0: none)
   int buffer_layers;            // pe_jump/async: layers of slow atoms moved to the fine clock
 
   // per-atom state, velocity units: free-flight velocity v^{n+1/2},
@@ -113,10 +115,13 @@ class FixPEJump : public Fix {
   double **fsave;      // total forces at the primary node
   int nmax_work;
 
-  int started;           // 1 once the two-step state is valid
-  int reinit_pending;    // redo the initial kick when all fix forces are in
-  int split_primary;     // 1 if the primary node force must be split
-  int use_copy;          // split by copying f before reverse communication
+  int started;                  // 1 once the two-step state is valid
+  int reinit_pending;           // redo the initial kick when all fix forces are in
+  int split_primary;            // 1 if forces not integrated by the rule act as impulses
+  int fresh_atoms;              // 1 if atoms were created since the last setup (this rank)
+  int others_bits;              // group bits of other time integrators
+  std::vector<Fix *> adders;    // other fixes that add forces (impulses)
+  int use_copy;                 // split by copying f before reverse communication
   int eflag_step, vflag_step;
   double h_step;      // step size used in the current step
   double stats[2];    // largest |v^{n+1/2}|^2, |[v]^n|^2 of the local atoms after the last step
@@ -128,7 +133,13 @@ class FixPEJump : public Fix {
   double cached[2];    // pseudo-kinetic and jump energy at cached_step
 
   virtual void start_scheme(const char *, bool);
+  void sort_other_fixes();
+  void check_other_integrators();
+  virtual void node_impulses();
+  void refresh_start_nodes();
+  double inverse_mass_of(int) const;
   void primary_sampled_force();
+  void project_sampled();
   void quadrature_sum();
   void auto_quadrature_sum();
   void evaluate_at(double shift, const AtomList *only);
@@ -177,7 +188,6 @@ class FixPEJump : public Fix {
   virtual double node_cost();                        // evaluations a sampled node costs
   virtual void check_lists();                        // neighbor lists valid for this step's nodes
   virtual std::string instability_advice() const;    // what to do when unstable
-  virtual bool replaced_forces_exact() const;        // other fixes may set forces
   virtual bool can_reverse() const;                  // a velocity reversal can be continued
   static constexpr int NGLOBAL = 6;                  // values of the global restart state
 };

@@ -76,6 +76,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
   if (compensate)
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
+  if (damp_time >= 0.0)
+    error->all(FLERR, "Fix pe_jump/async does not support the damp keyword yet");
   if (sample_mask != ForceSampler::ALL)
     error->all(FLERR,
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
@@ -155,6 +157,18 @@ void FixPEJumpAsync::init()
       error->all(FLERR,
                  "Fix pe_jump/async must be the only time integration fix (found fix {} {}): "
                  "atoms outside its group are frozen scenery",
+                 ifix->id, ifix->style);
+
+  // the fine and coarse forces of a slow atom are sampled apart, so another
+  // fix cannot act on its total force; only fix enforce2d (which zeroes a
+  // component that is zero anyway) may act on the forces
+  for (const auto &ifix : modify->get_fix_list())
+    if ((ifix != this) && (ifix->setmask() & POST_FORCE) &&
+        !utils::strmatch(ifix->style, "^enforce2d"))
+      error->all(FLERR,
+                 "Fix pe_jump/async cannot yet be combined with fix {} ({}), which acts on the "
+                 "forces: a slow atom's fine and coarse forces are sampled apart. Hold atoms by "
+                 "leaving them out of the fix group (frozen scenery), or use fix pe_jump",
                  ifix->id, ifix->style);
 
   // the fast group must be a non-empty part of the fix group
@@ -342,6 +356,9 @@ void FixPEJumpAsync::setup(int vflag)
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
+  // start nodes of slow atoms inside a coarse step cannot be taken again:
+  // new atoms take theirs at their first evaluation
+  fresh_atoms = 0;
   FixPEJump::setup(vflag);
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
@@ -371,15 +388,6 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 double FixPEJumpAsync::kick_step(int i) const
 {
   return split->coarse(i) ? nfine * update->dt : update->dt;
-}
-
-/* ----------------------------------------------------------------------
-   slow atoms also feel the slow interactions, which other fixes do not see
-------------------------------------------------------------------------- */
-
-bool FixPEJumpAsync::replaced_forces_exact() const
-{
-  return false;
 }
 
 /* ----------------------------------------------------------------------

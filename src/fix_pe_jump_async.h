@@ -101,13 +101,13 @@ class FixPEJumpAsync : public FixPEJump {
   std::vector<double> lag;            // work: time by which an atom lags behind
 
   void start_scheme(const char *, bool) override;
+  void node_impulses() override {}
   double kick_step(int) const override;
   void store_start_node() override;
   double node_cost() override;
   void check_lists() override;
   void advance(double) override;
   std::string instability_advice() const override;
-  bool replaced_forces_exact() const override;
   bool can_reverse() const override;
 
   void assign_buffer();

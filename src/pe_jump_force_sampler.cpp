@@ -18,6 +18,7 @@
 #include "bond.h"
 #include "comm.h"
 #include "dihedral.h"
+#include "fix.h"
 #include "force.h"
 #include "improper.h"
 #include "kspace.h"
@@ -86,6 +87,14 @@ void ForceSampler::compute(int mask, int eflag, int vflag)
   if (mask & KSPACE) force->kspace->compute(eflag, vflag);
 
   if (force->newton) comm->reverse_comm();
+  project();
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ForceSampler::project()
+{
+  for (auto *fix : projections) fix->post_force(0);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -16,7 +16,11 @@
 
 #include "pointers.h"
 
+#include <vector>
+
 namespace LAMMPS_NS {
+class Fix;
+
 namespace PEJump {
 
   // Evaluates selected force-field contributions at the current positions of
@@ -42,8 +46,15 @@ namespace PEJump {
     int present() const;
 
     // forward-communicate positions, clear forces, compute the contributions
-    // in mask with the given energy/virial flags, reverse-communicate forces
+    // in mask with the given energy/virial flags, reverse-communicate forces,
+    // and let the force-replacing fixes act on them (project())
     void compute(int mask, int eflag, int vflag);
+
+    // fixes that replace or project forces (setforce, freeze, ...): they act
+    // on the forces at every node, as they do on the forces of the MD loop
+    void set_projections(const std::vector<Fix *> &fixes) { projections = fixes; }
+    bool has_projections() const { return !projections.empty(); }
+    void project();    // the projections on atom->f of the owned atoms
 
     // potential energy of the contributions in mask as tallied by their last
     // computation with energy flags (collective call)
@@ -58,6 +69,7 @@ namespace PEJump {
     static int parse(const char *name);
 
    private:
+    std::vector<Fix *> projections;
     bigint counted_at;    // neighbor->ncalls when the counts were taken
     double count[6];      // global number of interactions per contribution
     void recount();

@@ -71,7 +71,7 @@ HalfRule lobatto_half(int n)
 
 /* ---------------------------------------------------------------------- */
 
-Quadrature::Quadrature(Family family, int npoints) : fam(family)
+Quadrature::Quadrature(Family family, int npoints, bool centre_node) : fam(family), npts(npoints)
 {
   const HalfRule half = (family == LEGENDRE) ? legendre_half(npoints) : lobatto_half(npoints);
 
@@ -87,6 +87,9 @@ Quadrature::Quadrature(Family family, int npoints) : fam(family)
   if (first) {
     node.push_back(0.5);
     weight.push_back(0.5 * half.w[0]);
+  } else if (centre_node && (family == LEGENDRE)) {
+    node.push_back(0.5);
+    weight.push_back(0.0);
   }
   for (int k = first; k < nhalf; ++k) {
     node.push_back(1.0 - 0.5 * (1.0 - half.x[k]));
@@ -106,6 +109,6 @@ int Quadrature::primary() const
 
 std::string Quadrature::name() const
 {
-  if (fam == LEGENDRE && size() == 1) return "midpoint";
-  return std::string(fam == LEGENDRE ? "legendre " : "lobatto ") + std::to_string(size());
+  if (fam == LEGENDRE && npts == 1) return "midpoint";
+  return std::string(fam == LEGENDRE ? "legendre " : "lobatto ") + std::to_string(npts);
 }

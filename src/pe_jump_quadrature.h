@@ -31,11 +31,15 @@ namespace PEJump {
 
     static constexpr int MAX_POINTS = 5;
 
-    Quadrature(Family family, int npoints);
+    // centre_node: a Gauss-Legendre rule with an even number of points gets
+    // the centre 1/2 as an extra node of weight 0, which then is the primary
+    // node (where forces that are not integrated by the rule are taken)
+    Quadrature(Family family, int npoints, bool centre_node = false);
 
     Family family() const { return fam; }
+    int points() const { return npts; }    // points of the rule proper
     int size() const { return static_cast<int>(node.size()); }
-    int degree() const { return fam == LEGENDRE ? 2 * size() - 1 : 2 * size() - 3; }
+    int degree() const { return fam == LEGENDRE ? 2 * npts - 1 : 2 * npts - 3; }
     std::string name() const;
 
     // true if the first node is the start of the interval and the last its end,
@@ -51,6 +55,7 @@ namespace PEJump {
 
    private:
     Family fam;
+    int npts;
   };
 
 }    // namespace PEJump

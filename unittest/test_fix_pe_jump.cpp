@@ -846,31 +846,3 @@ TEST(PEJump, CompensateKeepsSecondOrderWithVariableSteps)
     EXPECT_NEAR(order, 2.0, 0.15) << opts;
   }
 }
-
-/* ----------------------------------------------------------------------
-   fixes that replace forces: exact with the midpoint rule, a warning with
-   rules that sample other nodes
-------------------------------------------------------------------------- */
-
-TEST(PEJump, ForceReplacingFixesHoldAtomsWithMidpointOnly)
-{
-  for (const std::string rule : {"midpoint", "lobatto 3"}) {
-    Sim s(MPI_COMM_WORLD, false);
-    ::testing::internal::CaptureStdout();
-    fpu_gni(s);
-    s.cmds({"group held id 3", "fix 1 chain pe_jump quadrature " + rule,
-            "fix 2 held setforce 0.0 0.0 0.0", "velocity held set 0.0 0.0 0.0", "timestep 0.001",
-            "thermo 0"});
-    const double x0 = s.x(3, 0);
-    s.cmd("run 200 post no");
-    const std::string out = ::testing::internal::GetCapturedStdout();
-    if (rule == "midpoint") {
-      EXPECT_DOUBLE_EQ(s.x(3, 0), x0);
-      EXPECT_THAT(out, ::testing::Not(ContainsRegex("replaces forces")));
-    } else {
-      EXPECT_THAT(out,
-                  ContainsRegex("Fix setforce replaces forces, but fix pe_jump with "
-                                "quadrature lobatto 3 adds"));
-    }
-  }
-}

@@ -1,0 +1,338 @@
+// fix pe_jump beside other fixes: forces added or replaced by other fixes,
+// velocities changed by them, thermostats, other integrators, constraints.
+// Every case is measured against fix nve on the same input or refused.
+
+#include "pe_jump_systems.h"
+
+#include "exceptions.h"
+
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+using namespace PEJumpTest;
+using ::testing::ContainsRegex;
+
+namespace {
+
+const std::vector<std::string> ALL_RULES = {"midpoint",   "lobatto 2",  "lobatto 3",  "lobatto 4",
+                                            "lobatto 5",  "legendre 1", "legendre 2", "legendre 3",
+                                            "legendre 4", "legendre 5", "auto 1e-8"};
+
+// ideal gas of 20 atoms at rest in a large periodic box (pair_style zero)
+void ideal_gas(Sim &s)
+{
+  s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p p",
+          "region box block 0 20 0 20 0 20", "create_box 1 box",
+          "create_atoms 1 random 20 4711 NULL", "mass 1 2.0", "pair_style zero 1.0",
+          "pair_coeff * *", "neighbor 0.3 bin"});
+}
+
+// mean temperature and potential energy over one run of n steps (sampled
+// every 10 steps): one run, so that nothing between runs can hide what
+// happens during a run. Thermostats that rescale velocities at the end of
+// a step make the sampled temperature their target whatever the dynamics
+// does; the potential energy tells the temperature the atoms really have
+std::pair<double, double> mean_temp_pe(Sim &s, int n)
+{
+  s.cmd("reset_timestep 0");
+  s.cmd(fmt::format("fix avt all ave/time 10 {} {} c_thermo_temp c_thermo_pe", n / 10, n));
+  s.cmd(fmt::format("run {} post no", n));
+  const std::pair<double, double> t = {s.eval("f_avt[1]"),
+                                       s.eval("f_avt[2]") / s.lmp->atom->natoms};
+  s.cmd("unfix avt");
+  return t;
+}
+double mean_temp(Sim &s, int n)
+{
+  return mean_temp_pe(s, n).first;
+}
+
+// |max - min| of etotal (+ the fix energies) sampled every n steps
+double energy_spread(Sim &s, const std::string &energy, int chunks, int steps)
+{
+  double lo = 1e300, hi = -1e300;
+  for (int c = 0; c <= chunks; ++c) {
+    if (c) s.cmd("run " + std::to_string(steps) + " post no");
+    const double e = s.eval(energy);
+    lo = std::min(lo, e);
+    hi = std::max(hi, e);
+  }
+  return hi - lo;
+}
+
+}    // namespace
+
+/* ----------------------------------------------------------------------
+   fix addforce and fix gravity: a constant force gives the exact motion
+   of the centre of mass for every rule, in the first run too
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, ConstantForcesGiveExactMotionForEveryRule)
+{
+  for (const auto &rule : ALL_RULES) {
+    for (const std::string force : {"addforce 2.0 0.0 0.0", "gravity 1.0 vector 1 0 0"}) {
+      Sim s;
+      ideal_gas(s);
+      s.cmds({"fix 1 all pe_jump quadrature " + rule, "fix 2 all " + force, "timestep 0.005",
+              "variable xc equal xcm(all,x)", "variable vc equal vcm(all,x)", "thermo 0"});
+      const double x0 = s.eval("v_xc");
+      s.cmd("run 200 post no");    // t = 1, acceleration 1
+      EXPECT_NEAR(s.eval("v_vc"), 1.0, 1e-12) << rule << " " << force;
+      EXPECT_NEAR(s.eval("v_xc") - x0, 0.5, 1e-12) << rule << " " << force;
+    }
+  }
+}
+
+/* ----------------------------------------------------------------------
+   fix setforce and fix freeze hold atoms exactly for every rule
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, SetforceHoldsAtomsForEveryRule)
+{
+  for (const auto &rule : ALL_RULES) {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds({"region wall block INF INF INF INF 0 1.2", "group wall region wall",
+            "group mobile subtract all wall", "velocity wall set 0 0 0",
+            "fix 1 all pe_jump quadrature " + rule, "fix 2 wall setforce 0.0 0.0 0.0",
+            "compute dx wall displace/atom", "compute dmax wall reduce max c_dx[4]",
+            "timestep 0.005", "thermo 0", "run 200 post no"});
+    EXPECT_EQ(s.eval("c_dmax"), 0.0) << rule;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   position-dependent forces of other fixes: the energy including the
+   fix's own energy is kept as well as fix nve keeps it
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, PositionDependentFixForcesConserveLikeNve)
+{
+  // fix (as ID 2 on all atoms, with fix_modify energy yes), z boundary
+  const std::vector<std::pair<std::string, std::string>> fixes = {
+      {"spring/self 5.0", "p"},
+      {"indent 10.0 sphere 2.25 2.25 2.25 0.4", "p"},
+      {"wall/lj93 zlo EDGE 1.0 1.0 2.5 zhi EDGE 1.0 1.0 2.5", "f"}};
+  for (const auto &fix : fixes) {
+    const auto spread = [&](const std::string &integrator) {
+      Sim s;
+      s.cmds({"units lj",
+              "atom_style atomic",
+              "atom_modify map array",
+              "boundary p p " + fix.second,
+              "lattice fcc 0.8442",
+              "region box block 0 4 0 4 -0.5 4.5",
+              "create_box 1 box",
+              "region inside block 0 4 0 4 0 4",
+              "create_atoms 1 region inside",
+              "mass 1 1.0",
+              "velocity all create 1.0 87287 loop geom",
+              "pair_style lj/cut 2.5",
+              "pair_coeff 1 1 1.0 1.0 2.5",
+              "neighbor 0.3 bin",
+              "neigh_modify every 1 delay 0 check yes",
+              "fix 1 all " + integrator,
+              "fix 2 all " + fix.first,
+              "fix_modify 2 energy yes",
+              "timestep 0.004",
+              "thermo 0"});
+      s.cmd("run 0 post no");
+      return energy_spread(s, "etotal", 20, 50);
+    };
+    const double nve = spread("nve");
+    for (const std::string rule : {"midpoint", "lobatto 2", "lobatto 3", "legendre 2"}) {
+      const double pj = spread("pe_jump quadrature " + rule);
+      EXPECT_LT(pj, 2.0 * nve) << fix.first << " " << rule << ": nve " << nve << ", pe_jump " << pj;
+    }
+  }
+}
+
+/* ----------------------------------------------------------------------
+   fix viscous: v(t) of a single atom as with fix nve
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, ViscousDampsLikeNve)
+{
+  const auto speed = [](const std::string &integrator) {
+    Sim s;
+    ideal_gas(s);
+    s.cmds({"velocity all set 1.0 0.0 0.0", "fix 1 all " + integrator, "fix 2 all viscous 2.0",
+            "variable vc equal vcm(all,x)", "timestep 0.005", "thermo 0", "run 200 post no"});
+    return s.eval("v_vc");
+  };
+  const double exact = std::exp(-1.0);    // gamma/m = 1, t = 1
+  const double nve = speed("nve");
+  for (const std::string rule : {"midpoint", "lobatto 2", "lobatto 3", "legendre 2"}) {
+    const double pj = speed("pe_jump quadrature " + rule);
+    EXPECT_LT(std::fabs(pj - exact), 2.0 * std::fabs(nve - exact) + 1e-12)
+        << rule << ": nve " << nve << ", pe_jump " << pj << ", exact " << exact;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   thermostats: fix langevin reaches its target like fix nve + langevin,
+   without pumping the parasitic mode; temp/berendsen and temp/rescale
+   change the velocities that the scheme goes on with
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, LangevinReachesTargetTemperature)
+{
+  for (const std::string integrator : {"nve", "pe_jump", "pe_jump quadrature lobatto 3"}) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"fix 1 all " + integrator, "fix 2 all langevin 1.0 1.0 0.5 48279", "timestep 0.005",
+            "thermo 0", "run 1000 post no"});
+    const double jump0 = (integrator != "nve") ? s.vec("1", 1) : 0.0;
+    const double t = mean_temp(s, 10000);
+    EXPECT_NEAR(t, 1.0, 0.025) << integrator;
+    if (integrator != "nve") {
+      // the jump energy stays that of a smooth jump h F/m: it does not grow
+      EXPECT_LT(s.vec("1", 1), 2.0 * jump0) << integrator;
+      EXPECT_LT(s.vec("1", 1), 0.01 * s.eval("ke") * s.lmp->atom->natoms) << integrator;
+    }
+  }
+}
+
+TEST(PEJumpOtherFixes, VelocityRescalingThermostatsAct)
+{
+  for (const std::string thermostat :
+       {"temp/berendsen 1.0 1.0 0.1", "temp/rescale 10 1.0 1.0 0.02 1.0",
+        "temp/csvr 1.0 1.0 0.1 5533"}) {
+    double pe_nve = 0.0;
+    for (const std::string integrator : {"nve", "pe_jump", "pe_jump quadrature lobatto 3"}) {
+      Sim s;
+      lj_liquid(s);
+      s.cmds({"velocity all scale 2.0", "fix 1 all " + integrator, "fix 2 all " + thermostat,
+              "timestep 0.005", "thermo 0", "run 1000 post no"});
+      const auto tpe = mean_temp_pe(s, 2000);
+      EXPECT_NEAR(tpe.first, 1.0, 0.03) << thermostat << " " << integrator;
+      if (integrator == "nve")
+        pe_nve = tpe.second;
+      else    // per atom; at T = 1.64 it is 0.4 higher
+        EXPECT_NEAR(tpe.second, pe_nve, 0.03) << thermostat << " " << integrator;
+    }
+  }
+}
+
+/* ----------------------------------------------------------------------
+   fix momentum stops the centre of mass; fix wall/reflect reflects;
+   atoms inserted by fix deposit keep their velocity
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, MomentumStopsCentreOfMass)
+{
+  for (const std::string rule : {"midpoint", "lobatto 3"}) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"velocity all set 0.5 0.0 0.0 sum yes", "fix 1 all pe_jump quadrature " + rule,
+            "fix 2 all momentum 1 linear 1 1 1", "variable xc equal xcm(all,x)",
+            "variable vc equal vcm(all,x)", "timestep 0.005", "thermo 0", "run 0 post no"});
+    const double x0 = s.eval("v_xc"), v0 = s.eval("v_vc");
+    s.cmd("run 100 post no");
+    // stopped at the end of the first step, as with fix nve: it moved by h v_cm
+    EXPECT_NEAR(s.eval("v_vc"), 0.0, 1e-12) << rule;
+    EXPECT_NEAR(s.eval("v_xc") - x0, 0.005 * v0, 1e-12) << rule;
+  }
+}
+
+TEST(PEJumpOtherFixes, WallReflectKeepsAtomsInside)
+{
+  for (const std::string rule : {"midpoint", "lobatto 3"}) {
+    Sim s;
+    s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p f",
+            "region box block 0 10 0 10 0 10", "create_box 1 box", "create_atoms 1 single 5 5 1",
+            "mass 1 1.0", "pair_style zero 1.0", "pair_coeff * *", "velocity all set 0.0 0.0 -1.0",
+            "fix 1 all pe_jump quadrature " + rule, "fix 2 all wall/reflect zlo EDGE",
+            "timestep 0.01", "thermo 0", "run 300 post no"});
+    // bounced at t = 1 with speed 1: at t = 3 it is at z = 2, moving up
+    EXPECT_NEAR(s.v(1, 2), 1.0, 1e-12) << rule;
+    EXPECT_NEAR(s.x(1, 2), 2.0, 1e-9) << rule;
+  }
+}
+
+TEST(PEJumpOtherFixes, DepositedAtomsKeepTheirVelocity)
+{
+  for (const std::string integrator : {"nve", "pe_jump", "pe_jump quadrature lobatto 3"}) {
+    Sim s;
+    s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p f",
+            "region box block 0 10 0 10 0 20", "create_box 1 box", "mass 1 1.0",
+            "pair_style zero 1.0", "pair_coeff * *", "region slab block 0 10 0 10 15 16",
+            "fix 1 all " + integrator, "fix 2 all deposit 1 1 10 12345 region slab vz -1.0 -1.0",
+            "timestep 0.01", "thermo 0", "run 11 post no"});
+    // inserted at step 10 inside the slab, moving down at speed 1 since then
+    ASSERT_EQ(s.lmp->atom->natoms, 1) << integrator;
+    EXPECT_NEAR(s.v(1, 2), -1.0, 1e-12) << integrator;
+    const double z1 = s.x(1, 2);
+    s.cmd("run 100 post no");
+    EXPECT_NEAR(s.x(1, 2), z1 - 1.0, 1e-9) << integrator;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   other time integrators and a second fix pe_jump: refused where their
+   atoms interact with this fix's atoms at mixed times, correct otherwise
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, OtherIntegratorsOnInteractingAtoms)
+{
+  const auto spread = [](const std::string &second, const std::string &first) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"region half block 0 2 INF INF INF INF", "group left region half",
+            "group right subtract all left", "fix 1 left " + first, "fix 3 right " + second,
+            "timestep 0.005", "thermo 0", "run 0 post no"});
+    return energy_spread(s, "etotal", 10, 50);
+  };
+  const double nve = spread("nve", "nve");
+  for (const std::string second : {"nve", "pe_jump"}) {
+    for (const std::string rule : {"midpoint", "lobatto 3", "legendre 2"}) {
+      EXPECT_THROW(spread(second, "pe_jump quadrature " + rule), LAMMPS_NS::LAMMPSException)
+          << second << " + " << rule;
+    }
+  }
+  for (const std::string second : {"nve", "pe_jump quadrature lobatto 2"}) {
+    const double lob2 = spread(second, "pe_jump quadrature lobatto 2");
+    EXPECT_LT(lob2, 2.0 * nve) << second << " + lobatto 2: " << lob2 << " nve " << nve;
+  }
+}
+
+TEST(PEJumpOtherFixes, OtherIntegratorsOnSeparateAtomsAreAllowed)
+{
+  Sim s;
+  s.cmds({"units lj", "atom_style atomic", "lattice fcc 0.8442", "region box block 0 4 0 4 0 4",
+          "create_box 2 box", "create_atoms 1 box", "create_atoms 2 box", "mass * 1.0",
+          "group c1 type 1", "group c2 type 2", "velocity all create 1.0 4928",
+          "pair_style lj/cut 2.5", "pair_coeff * * 1.0 1.0 2.5", "neigh_modify exclude type 1 2",
+          "fix 1 c1 nve", "fix 2 c2 pe_jump quadrature lobatto 3", "timestep 0.005", "thermo 0"});
+  EXPECT_NO_THROW(s.cmd("run 50 post no"));
+}
+
+/* ----------------------------------------------------------------------
+   constraints assume velocity Verlet: refused
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, ShakeAndRattleAreRefused)
+{
+  for (const std::string constraint : {"shake", "rattle"}) {
+    Sim s;
+    s.cmds({"units real", "atom_style full", "atom_modify map array", "boundary p p p",
+            "region box block 0 20 0 20 0 20",
+            "create_box 1 box bond/types 1 extra/bond/per/atom 1", "mass 1 1.0",
+            "create_atoms 1 single 5 5 5", "create_atoms 1 single 6 5 5",
+            "create_bonds single/bond 1 1 2", "pair_style zero 3.0", "pair_coeff * *",
+            "bond_style harmonic", "bond_coeff 1 450.0 1.0", "fix 1 all pe_jump",
+            "fix 2 all " + constraint + " 1e-6 20 0 b 1", "thermo 0"});
+    try {
+      s.cmd("run 10 post no");
+      ADD_FAILURE() << constraint << " was not refused";
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      EXPECT_THAT(e.what(), ContainsRegex("constraints of fix 2")) << constraint;
+    }
+  }
+}
