@@ -141,12 +141,12 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
       iarg += 2;
     } else if (strcmp(arg[iarg], "damp") == 0) {
       if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " damp", error);
-      if (strcmp(arg[iarg + 1], "auto") == 0)
+      if (strcmp(arg[iarg + 1], "auto") == 0) {
         damp_time = -1.0;
-      else
+      } else {
         damp_time = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
-      if ((damp_time != -1.0) && !(damp_time >= 0.0))
-        error->all(FLERR, "Fix {} damp needs a time >= 0 or auto", style);
+        if (!(damp_time >= 0.0)) error->all(FLERR, "Fix {} damp needs a time >= 0 or auto", style);
+      }
       iarg += 2;
     } else if (strcmp(arg[iarg], "compensate") == 0) {
       if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " compensate", error);
@@ -361,7 +361,10 @@ void FixPEJump::check_other_integrators()
   int local = 0;
   for (int n = 0; (n < neighbor->nlist) && !local; n++) {
     const NeighList *list = neighbor->lists[n];
-    if (!list || !list->numneigh || list->kokkos) continue;
+    // lists of pair styles, built at every reneighboring (others may be stale)
+    if (!list || !list->numneigh || list->kokkos || list->occasional ||
+        (list->requestor_type != NeighList::PAIR))
+      continue;
     for (int ii = 0; (ii < list->inum) && !local; ii++) {
       const int i = list->ilist[ii];
       for (int jj = 0; jj < list->numneigh[i]; jj++)
