@@ -675,6 +675,8 @@ TEST(PEJump, BadInputGivesClearErrors)
            Case{"fix 1 all pe_jump quadrature legendre 6", "legendre needs 1 to 5 points, got 6"},
            Case{"fix 1 all pe_jump quadrature legendre two", "Expected integer parameter"},
            Case{"fix 1 all pe_jump init", "missing argument"},
+           Case{"fix 1 all pe_jump damp -1", "damp needs a time >= 0 or auto"},
+           Case{"fix 1 all pe_jump damp", "missing argument"},
            Case{"fix 1 all pe_jump init zero", "Unknown fix pe_jump init style: zero"},
            Case{"fix 1 all pe_jump adapt 1e-3 0.1", "missing argument"},
            Case{"fix 1 all pe_jump adapt 0 0.001 0.01", "adapt eps must be > 0"},
