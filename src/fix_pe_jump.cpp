@@ -405,11 +405,13 @@ void FixPEJump::setup(int /*vflag*/)
       start_scheme("velocities were changed since the last run: restarting the two-step scheme "
                    "from the current positions and velocities",
                    true);
-    else if ((change == 1) && (comm->me == 0))
+    else
+      refresh_start_nodes();
+    if ((change == 1) && (comm->me == 0))
       utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
                      style);
   }
-  refresh_start_nodes();
+  fresh_atoms = 0;
   check_other_integrators();
   if (adapt) energy_scale = fabs(pseudo_energy_now());
   if (auto_tol > 0.0) {
@@ -459,15 +461,22 @@ void FixPEJump::node_impulses()
   const int nlocal = atom->nlocal;
   const bool half_kick = split_primary && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
+  bool changed = half_kick;
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     for (int k = 0; k < 3; k++)
-      if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
+      if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) {
+        vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
+        changed = true;
+      }
     if (half_kick && !std::isnan(fstart[i][0])) {
       const double dtfm = dth * inverse_mass_of(i);
       for (int k = 0; k < 3; k++) vhalf[i][k] += dtfm * (f[i][k] - fstart[i][k]);
     }
   }
+  // the speeds taken at the end of the last step no longer bound the
+  // excursion of this step's nodes
+  if (changed) stats_valid = 0;
 }
 
 /* ----------------------------------------------------------------------
@@ -888,9 +897,7 @@ void FixPEJump::refresh_start_nodes()
 {
   int any = 0;
   MPI_Allreduce(&fresh_atoms, &any, 1, MPI_INT, MPI_MAX, world);
-  fresh_atoms = 0;
-  if (!any || !started || !rule->has_end_nodes()) return;
-  store_start_node();
+  if (any && rule->has_end_nodes()) store_start_node();
 }
 
 /* ----------------------------------------------------------------------
