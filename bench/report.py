@@ -406,10 +406,10 @@ def sec_wave(R, targets):
                   elabel="max_i |u_i - u(x_i, T)|", extra_panel=("eH", "max |H - H0|/|H0| (samples)"))
     out = ["## 6. Work-precision: inhomogeneous wave against the exact solution\n"]
     out.append("Paper section 4.3.2 (`examples/wave-inhomogeneous`): c = 10 on (0, 0.5), 1 on (0.5, 1), N "
-               "intervals, u0 = 0.01 exp(-(20(x-0.2))^2), v0 = -c1 u0' (design.md section 4: the paper's printed "
+               "intervals, u0 = 0.01 exp(-(20(x-0.2))^2), v0 = -c1 u0' (doc/theory.md, section 6: the paper's printed "
                "v0 is inconsistent with its exact solution). The stiff springs (c1) are bonds, the soft ones (c2) a "
                "pair table (`in.springs`), so that respa can split them. Each curve refines N (and the steps with "
-               "dx); the stable async pair of design.md, h_S = 0.5 dx, h_F = 0.05 dx (K = 10), and h_S = 0.5 dx, "
+               "dx); the stable async pair h_S = 0.5 dx, h_F = 0.05 dx (K = 10), and h_S = 0.5 dx, "
                "h_F = 0.1 dx (K = 5). The error against the exact solution contains the space discretisation "
                "error, which dominates at these N (the same for all integrators at the same N); the cost to reach "
                f"it is what differs. {d['reps']} repetitions, medians. Right panel: energy H = pe + ke (sampled at "

@@ -198,7 +198,7 @@ TEST(PEJump, PseudoEnergyConservedRandomStepsHarmonicMidpoint)
   s.cmd("fix 1 all pe_jump");
   // +-10% around 0.01 (h omega_max = 0.2). Larger random changes pump the
   // parasitic mode until the discrete energy blows up within 10^4 steps
-  // (design.md section 4); the pseudo-energy stays constant all the same
+  // (doc/theory.md, section 3); the pseudo-energy stays constant all the same
   std::mt19937 gen(2024);
   std::uniform_real_distribution<double> dt(0.009, 0.011);
   std::vector<double> dev;
@@ -249,7 +249,7 @@ TEST(PEJump, PseudoEnergyConservedRandomStepsFpuLobatto3)
 TEST(PEJump, MidpointNotExactOnQuarticSprings)
 {
   // the midpoint rule is not exact for the quartic FPU springs: the
-  // pseudo-energy then varies at the 1e-7 level (design.md: 6e-7)
+  // pseudo-energy then varies at the 1e-6 level (examples/fpu: 1.57e-6)
   Sim s;
   fpu_gni(s);
   s.cmd("fix 1 chain pe_jump");
@@ -264,7 +264,7 @@ TEST(PEJump, MidpointNotExactOnQuarticSprings)
 }
 
 /* ----------------------------------------------------------------------
-   the discrete energy with init kick and init paper (design.md section 4)
+   the discrete energy with init kick and init paper (doc/theory.md, section 4)
 ------------------------------------------------------------------------- */
 
 TEST(PEJump, KickInitialisationKeepsParasiticModeOut)
@@ -782,7 +782,7 @@ TEST(PEJump, QuadratureAutoKeepsTheStepDefectBelowTol)
 
 TEST(PEJump, CompensateStepChangesKeepsEnergyBounded)
 {
-  // +-50% random steps around 1e-3 (design.md section 4), 20000 steps, three
+  // +-50% random steps around 1e-3 (doc/theory.md, section 3), 20000 steps, three
   // sequences: the growth of H depends much on the sequence, so compare sums
   double range[2] = {0.0, 0.0};
   for (int seed : {1, 2, 3}) {

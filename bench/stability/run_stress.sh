@@ -1,5 +1,5 @@
 #!/bin/bash
-# PE-JUMP stability stress tests (issue 4): CFL sweep, long FPU run, nonlinear
+# PE-JUMP stability stress tests: CFL sweep, long FPU run, nonlinear
 # string with adapt, slow/fast resonance over K, hard cases.
 #
 #   bash bench/stability/run_stress.sh            # full: about 10 minutes on one core

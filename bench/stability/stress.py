@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Stability stress tests of fix pe_jump and fix pe_jump/async (issue 4).
+"""Stability stress tests of fix pe_jump and fix pe_jump/async.
 
   /usr/bin/python3 bench/stability/stress.py [--quick] [--studies cfl,long,string,resonance,hard]
 

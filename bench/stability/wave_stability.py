@@ -15,7 +15,7 @@ the last of them is the mixed atom), the slow atoms are the rest.
 Initial values: u0(x) = 1e-2 exp(-(20(x-0.2))^2) on (0,0.5), and
 v0 = -c1 u0'(x) = 80 (x-0.2) exp(-(20(x-0.2))^2) on (0,0.5) (a right-going
 pulse; the v0 printed in the paper lacks the factor c1, see
-design.md section 4).
+doc/theory.md, section 6).
 
 For every coarse step h_S (given as h_S/dx) and every K (fine steps per
 coarse step, h_F = h_S/K), run NCOARSE coarse steps with
