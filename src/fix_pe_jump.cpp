@@ -213,7 +213,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 
   FixPEJump::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
-  fresh_atoms = 0;
+  fresh_atoms = others_bits = velocity_hooks = 0;
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
 }
@@ -319,8 +319,15 @@ void FixPEJump::sort_other_fixes()
   std::vector<Fix *> projections;
   adders.clear();
   others_bits = 0;
+  // hooks where another fix may change velocities between two steps of
+  // this fix, or inside a step
+  constexpr int BETWEEN = INITIAL_INTEGRATE | FINAL_INTEGRATE | END_OF_STEP;
+  constexpr int INSIDE = POST_INTEGRATE | PRE_EXCHANGE | PRE_NEIGHBOR | POST_NEIGHBOR | PRE_FORCE |
+      PRE_REVERSE | POST_FORCE;
+  velocity_hooks = 0;
   for (auto *ifix : modify->get_fix_list()) {
     if (ifix == this) continue;
+    velocity_hooks |= ifix->setmask() & (BETWEEN | INSIDE);
     if (ifix->time_integrate) {
       others_bits |= ifix->groupbit;
       continue;
@@ -461,11 +468,13 @@ void FixPEJump::node_impulses()
   const int nlocal = atom->nlocal;
   const bool half_kick = split_primary && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
+  const bool compare = velocity_hooks & (INITIAL_INTEGRATE | FINAL_INTEGRATE | END_OF_STEP);
+  if (!compare && !half_kick) return;
   bool changed = half_kick;
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     for (int k = 0; k < 3; k++)
-      if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) {
+      if (compare && (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k])) {
         vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
         changed = true;
       }
@@ -620,12 +629,14 @@ void FixPEJump::final_integrate()
   evals_step = 1.0;
 
   // velocities changed by other fixes during the step (wall/reflect, ...)
-  double **v = atom->v;
-  const int *mask = atom->mask;
-  for (int i = 0; i < atom->nlocal; i++)
-    if (mask[i] & groupbit)
-      for (int k = 0; k < 3; k++)
-        if (v[i][k] != vhalf[i][k]) vhalf[i][k] = v[i][k];
+  if (velocity_hooks & ~(INITIAL_INTEGRATE | FINAL_INTEGRATE | END_OF_STEP)) {
+    double **v = atom->v;
+    const int *mask = atom->mask;
+    for (int i = 0; i < atom->nlocal; i++)
+      if (mask[i] & groupbit)
+        for (int k = 0; k < 3; k++)
+          if (v[i][k] != vhalf[i][k]) vhalf[i][k] = v[i][k];
+  }
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself

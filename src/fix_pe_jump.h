@@ -120,6 +120,7 @@ class FixPEJump : public Fix {
   int split_primary;            // 1 if forces not integrated by the rule act as impulses
   int fresh_atoms;              // 1 if atoms were created since the last setup (this rank)
   int others_bits;              // group bits of other time integrators
+  int velocity_hooks;           // hooks of other fixes that may change velocities
   std::vector<Fix *> adders;    // other fixes that add forces (impulses)
   int use_copy;                 // split by copying f before reverse communication
   int eflag_step, vflag_step;
