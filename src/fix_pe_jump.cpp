@@ -316,7 +316,7 @@ void FixPEJump::init()
 
 void FixPEJump::sort_other_fixes()
 {
-  std::vector<Fix *> projections;
+  std::vector<Fix *> preparations, projections;
   adders.clear();
   others_bits = 0;
   // hooks where another fix may change velocities between two steps of
@@ -328,6 +328,7 @@ void FixPEJump::sort_other_fixes()
   for (auto *ifix : modify->get_fix_list()) {
     if (ifix == this) continue;
     velocity_hooks |= ifix->setmask() & (BETWEEN | INSIDE);
+    if (ifix->setmask() & PRE_FORCE) preparations.push_back(ifix);
     if (ifix->time_integrate) {
       others_bits |= ifix->groupbit;
       continue;
@@ -345,7 +346,7 @@ void FixPEJump::sort_other_fixes()
     else
       adders.push_back(ifix);
   }
-  sampler->set_projections(projections);
+  sampler->set_hooks(preparations, projections);
 }
 
 /* ----------------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include "bond.h"
 #include "comm.h"
 #include "dihedral.h"
+#include "error.h"
 #include "fix.h"
 #include "force.h"
 #include "improper.h"
@@ -25,15 +26,25 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "timer.h"
+#include "utils.h"
 
 #include <cstring>
+
+// with the OPENMP package, /omp styles leave the forces of the threads
+// unreduced unless they are the last /omp style of the Verlet order
+#if __has_include("fix_omp.h")
+#include "fix_omp.h"
+#include "thr_data.h"
+#define PEJUMP_WITH_OPENMP
+#endif
 
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
 
 /* ---------------------------------------------------------------------- */
 
-ForceSampler::ForceSampler(LAMMPS *lmp) : Pointers(lmp), counted_at(-1)
+ForceSampler::ForceSampler(LAMMPS *lmp) : Pointers(lmp), omp(nullptr), counted_at(-1)
 {
   for (double &c : count) c = 0.0;
 }
@@ -70,24 +81,79 @@ int ForceSampler::present() const
 
 /* ---------------------------------------------------------------------- */
 
+void ForceSampler::set_hooks(const std::vector<Fix *> &prepare, const std::vector<Fix *> &project)
+{
+  preparations = prepare;
+  projections = project;
+  omp = nullptr;
+  for (auto *fix : preparations)
+    if (utils::strmatch(fix->style, "^OMP$")) omp = fix;
+#ifndef PEJUMP_WITH_OPENMP
+  if (omp && (comm->nthreads > 1))
+    error->all(FLERR,
+               "Fix pe_jump was built without the OPENMP package headers and cannot reduce the "
+               "forces of several OpenMP threads: rebuild it with PKG_OPENMP or use 1 thread");
+#endif
+}
+
+/* ---------------------------------------------------------------------- */
+
 void ForceSampler::compute(int mask, int eflag, int vflag)
 {
+  timer->stamp(Timer::MODIFY);
   comm->forward_comm();
+  timer->stamp(Timer::COMM);
 
   size_t nbytes = sizeof(double) * atom->nlocal;
   if (force->newton) nbytes += sizeof(double) * atom->nghost;
   if (nbytes) memset(&atom->f[0][0], 0, 3 * nbytes);
+  for (auto *fix : preparations) fix->pre_force(vflag);
+  timer->stamp(Timer::MODIFY);
 
   mask &= present();
-  if (mask & PAIR) force->pair->compute(eflag, vflag);
-  if (mask & BOND) force->bond->compute(eflag, vflag);
-  if (mask & ANGLE) force->angle->compute(eflag, vflag);
-  if (mask & DIHEDRAL) force->dihedral->compute(eflag, vflag);
-  if (mask & IMPROPER) force->improper->compute(eflag, vflag);
-  if (mask & KSPACE) force->kspace->compute(eflag, vflag);
+  if (mask & PAIR) {
+    force->pair->compute(eflag, vflag);
+    timer->stamp(Timer::PAIR);
+  }
+  if (mask & (BOND | ANGLE | DIHEDRAL | IMPROPER)) {
+    if (mask & BOND) force->bond->compute(eflag, vflag);
+    if (mask & ANGLE) force->angle->compute(eflag, vflag);
+    if (mask & DIHEDRAL) force->dihedral->compute(eflag, vflag);
+    if (mask & IMPROPER) force->improper->compute(eflag, vflag);
+    timer->stamp(Timer::BOND);
+  }
+  if (mask & KSPACE) {
+    force->kspace->compute(eflag, vflag);
+    timer->stamp(Timer::KSPACE);
+  }
+  reduce_threads();
 
-  if (force->newton) comm->reverse_comm();
+  if (force->newton) {
+    comm->reverse_comm();
+    timer->stamp(Timer::COMM);
+  }
   project();
+}
+
+/* ----------------------------------------------------------------------
+   /omp styles add the forces of threads other than the first into their
+   own arrays, which the last /omp style of the Verlet order reduces. If
+   that style was not among the contributions computed, reduce here.
+------------------------------------------------------------------------- */
+
+void ForceSampler::reduce_threads()
+{
+#ifdef PEJUMP_WITH_OPENMP
+  auto *fix = static_cast<FixOMP *>(omp);
+  if (!fix || fix->get_reduced() || (fix->get_nthr() < 2)) return;
+  double **f = atom->f;
+  const int nall = atom->nlocal + atom->nghost;
+  for (int t = 1; t < fix->get_nthr(); t++) {
+    double **ft = fix->get_thr(t)->get_f();
+    for (int i = 0; i < nall; i++)
+      for (int k = 0; k < 3; k++) f[i][k] += ft[i][k];
+  }
+#endif
 }
 
 /* ---------------------------------------------------------------------- */

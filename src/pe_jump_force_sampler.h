@@ -24,8 +24,11 @@ class Fix;
 namespace PEJump {
 
   // Evaluates selected force-field contributions at the current positions of
-  // the owned atoms (ghosts are brought up to date first), the way the Verlet
-  // loop does, and counts interactions so that evaluations can be reported
+  // the owned atoms (ghosts are brought up to date first) with the sequence
+  // of the Verlet loop: forward communication, force clear, the pre_force
+  // stage of other fixes, the contributions, reverse communication, with
+  // the same timer stamps; then the fixes that replace or project forces act
+  // on the result. Counts interactions so that evaluations can be reported
   // in units of full force evaluations.
 
   class ForceSampler : protected Pointers {
@@ -45,14 +48,17 @@ namespace PEJump {
     // contributions that the current force field has (call in init())
     int present() const;
 
-    // forward-communicate positions, clear forces, compute the contributions
-    // in mask with the given energy/virial flags, reverse-communicate forces,
-    // and let the force-replacing fixes act on them (project())
+    // forward-communicate positions, clear forces, run the pre_force stage
+    // of the other fixes, compute the contributions in mask with the given
+    // energy/virial flags, reverse-communicate forces, and let the
+    // force-replacing fixes act on them (project())
     void compute(int mask, int eflag, int vflag);
 
-    // fixes that replace or project forces (setforce, freeze, ...): they act
-    // on the forces at every node, as they do on the forces of the MD loop
-    void set_projections(const std::vector<Fix *> &fixes) { projections = fixes; }
+    // other fixes with a pre_force stage (e.g. fix omp, which prepares the
+    // per-thread force arrays), and fixes that replace or project forces
+    // (setforce, freeze, ...), which act on the forces at every node as
+    // they do on the forces of the MD loop
+    void set_hooks(const std::vector<Fix *> &prepare, const std::vector<Fix *> &project);
     bool has_projections() const { return !projections.empty(); }
     void project();    // the projections on atom->f of the owned atoms
 
@@ -69,7 +75,9 @@ namespace PEJump {
     static int parse(const char *name);
 
    private:
-    std::vector<Fix *> projections;
+    std::vector<Fix *> preparations, projections;
+    Fix *omp;    // the OPENMP package's fix, if the /omp styles are in use
+    void reduce_threads();
     bigint counted_at;    // neighbor->ncalls when the counts were taken
     double count[6];      // global number of interactions per contribution
     void recount();

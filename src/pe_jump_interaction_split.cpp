@@ -19,6 +19,8 @@
 #include "neighbor.h"
 #include "pair.h"
 
+#include <algorithm>
+
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
 
@@ -28,10 +30,10 @@ InteractionSplit::InteractionSplit(LAMMPS *lmp, int group, int fast) :
     Pointers(lmp), groupbit(group), finebit(fast), current(NONE)
 {
   frac[FINE] = frac[COARSE] = 0.0;
-  topo[0] = {0, &neighbor->nbondlist, &neighbor->bondlist, 2, 0, nullptr, {}};
-  topo[1] = {0, &neighbor->nanglelist, &neighbor->anglelist, 3, 0, nullptr, {}};
-  topo[2] = {0, &neighbor->ndihedrallist, &neighbor->dihedrallist, 4, 0, nullptr, {}};
-  topo[3] = {0, &neighbor->nimproperlist, &neighbor->improperlist, 4, 0, nullptr, {}};
+  topo[0] = {0, &neighbor->nbondlist, &neighbor->bondlist, 2, 0, nullptr, 0};
+  topo[1] = {0, &neighbor->nanglelist, &neighbor->anglelist, 3, 0, nullptr, 0};
+  topo[2] = {0, &neighbor->ndihedrallist, &neighbor->dihedrallist, 4, 0, nullptr, 0};
+  topo[3] = {0, &neighbor->nimproperlist, &neighbor->improperlist, 4, 0, nullptr, 0};
 }
 
 /* ---------------------------------------------------------------------- */
@@ -97,8 +99,8 @@ void InteractionSplit::build()
   for (auto &t : topo) {
     if (t.on) {
       split_topology(t);
-      local[FINE] += t.part[FINE].size();
-      local[COARSE] += t.part[COARSE].size();
+      local[FINE] += t.nfine;
+      local[COARSE] += t.nfull - t.nfine;
     }
   }
   local[2] = local[FINE] + local[COARSE];
@@ -167,9 +169,21 @@ void InteractionSplit::split_topology(TopoList &t)
 {
   t.nfull = *t.count;
   t.full = *t.list;
-  t.part[FINE].clear();
-  t.part[COARSE].clear();
-  for (int n = 0; n < t.nfull; n++) t.part[klass(t.full[n], t.natoms)].push_back(t.full[n]);
+  const int width = t.natoms + 1;    // atoms and type
+  coarse_entries.clear();
+  t.nfine = 0;
+  for (int n = 0; n < t.nfull; n++) {
+    int *entry = t.full[n];
+    if (klass(entry, t.natoms) == COARSE) {
+      coarse_entries.insert(coarse_entries.end(), entry, entry + width);
+    } else {
+      if (t.nfine != n) std::copy(entry, entry + width, t.full[t.nfine]);
+      ++t.nfine;
+    }
+  }
+  for (int n = t.nfine; n < t.nfull; n++)
+    std::copy(&coarse_entries[(n - t.nfine) * width], &coarse_entries[(n - t.nfine + 1) * width],
+              t.full[n]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -189,8 +203,8 @@ void InteractionSplit::activate(Subset which)
   }
   for (auto &t : topo) {
     if (!t.on) continue;
-    *t.count = static_cast<int>(t.part[which].size());
-    *t.list = t.part[which].data();
+    *t.count = (which == FINE) ? t.nfine : t.nfull - t.nfine;
+    *t.list = (which == FINE) ? t.full : t.full + t.nfine;
   }
   current = which;
 }
@@ -237,7 +251,8 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
 
   for (const auto &t : topo) {
     if (!t.on) continue;
-    for (const int *entry : t.part[FINE]) {
+    for (int n = 0; n < t.nfine; n++) {
+      const int *entry = t.full[n];
       bool slow = false;
       for (int k = 0; k < t.natoms; k++) slow = slow || coarse(entry[k]);
       if (!slow) continue;
@@ -261,7 +276,7 @@ void InteractionSplit::mark_fine_participants(std::vector<int> &flag) const
   }
   for (const auto &t : topo) {
     if (!t.on) continue;
-    for (const int *entry : t.part[FINE])
-      for (int k = 0; k < t.natoms; k++) flag[entry[k]] = 1;
+    for (int n = 0; n < t.nfine; n++)
+      for (int k = 0; k < t.natoms; k++) flag[t.full[n][k]] = 1;
   }
 }

@@ -90,7 +90,10 @@ namespace PEJump {
     std::vector<PairList> pairs;
     std::vector<int> cross;    // pairs (i,j) of a fine and a coarse atom
 
-    // one topology list (bonds, angles, ...) of the neighbor class
+    // one topology list (bonds, angles, ...) of the neighbor class, whose
+    // entries are reordered in place: the FINE ones first, then the COARSE
+    // ones, so that either subset is a contiguous part of the list (as the
+    // /omp styles, which read it as one array, require)
     struct TopoList {
       int on;    // the style exists, so that the neighbor class builds this list
       int *count;
@@ -98,8 +101,9 @@ namespace PEJump {
       int natoms;    // atoms per entry
       int nfull;     // entries of the complete list
       int **full;    // the complete list
-      std::vector<int *> part[2];
+      int nfine;     // entries of the FINE subset
     };
+    std::vector<int> coarse_entries;    // work: entries moved behind the fine ones
     TopoList topo[4];
 
     int klass(const int *atoms, int n) const;

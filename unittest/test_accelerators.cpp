@@ -1,0 +1,81 @@
+// fix pe_jump and fix pe_jump/async with the accelerator styles of the
+// OPENMP (1 and 2 threads) and OPT packages: the same trajectory as with
+// the plain styles, for every sample subset
+
+#include "pe_jump_systems.h"
+
+#include "gtest/gtest.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace PEJumpTest;
+
+namespace {
+
+// bonded fcc crystal (pair lj/cut and harmonic bonds to the 12 neighbours),
+// run 200 steps; positions by atom ID
+std::vector<double> bonded_run(const std::string &accelerator, const std::string &fix)
+{
+  Sim s;
+  if (accelerator == "opt")
+    s.cmd("suffix opt");
+  else if (!accelerator.empty())
+    s.cmds({"package " + accelerator, "suffix omp"});
+  s.cmds({"units lj",
+          "atom_style bond",
+          "atom_modify map array",
+          "lattice fcc 0.8442",
+          "region box block 0 4 0 4 0 4",
+          "create_box 1 box bond/types 1 extra/bond/per/atom 14 extra/special/per/atom 50",
+          "create_atoms 1 box",
+          "mass 1 1.0",
+          "velocity all create 1.0 87287 loop geom",
+          "pair_style lj/cut 2.5",
+          "pair_coeff 1 1 1.0 1.0 2.5",
+          "bond_style harmonic",
+          "bond_coeff 1 20.0 1.09",
+          "special_bonds lj 0.0 1.0 1.0",
+          "create_bonds many all all 1 1.0 1.2",
+          "neighbor 0.3 bin",
+          "region fast block 0 1.5 INF INF INF INF",
+          "group fast region fast",
+          fix,
+          "timestep 0.002",
+          "thermo 0",
+          "run 200 post no"});
+  std::vector<double> x;
+  for (int id = 1; id <= s.lmp->atom->natoms; id++)
+    for (int k = 0; k < 3; k++) x.push_back(s.x(id, k));
+  return x;
+}
+
+double max_diff(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double d = 0.0;
+  for (size_t i = 0; i < a.size(); i++) d = std::max(d, std::fabs(a[i] - b[i]));
+  return d;
+}
+
+}    // namespace
+
+TEST(PEJumpAccelerators, SameTrajectoryWithOmpAndOptStyles)
+{
+  const std::vector<std::string> fixes = {"fix 1 all pe_jump",
+                                          "fix 1 all pe_jump quadrature lobatto 3",
+                                          "fix 1 all pe_jump quadrature lobatto 3 sample pair",
+                                          "fix 1 all pe_jump quadrature lobatto 3 sample bond",
+                                          "fix 1 all pe_jump quadrature legendre 2 sample pair",
+                                          "fix 1 all pe_jump/async 5 fast",
+                                          "fix 1 all pe_jump/async 5 fast quadrature lobatto 3"};
+  for (const auto &fix : fixes) {
+    const auto plain = bonded_run("", fix);
+    for (const std::string accelerator : {"omp 1", "omp 2", "opt"}) {
+      const auto accelerated = bonded_run(accelerator, fix);
+      // the thread count changes the order of the force sums: round-off only
+      EXPECT_LT(max_diff(plain, accelerated), 1e-10) << fix << " with " << accelerator;
+    }
+  }
+}
