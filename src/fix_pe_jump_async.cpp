@@ -139,16 +139,6 @@ void FixPEJumpAsync::init()
                "Fix pe_jump/async cannot split k-space ({}) into slow and fast interactions: "
                "use fix pe_jump",
                force->kspace_style);
-  const char *hybrid = nullptr;
-  if (force->bond && utils::strmatch(force->bond_style, "^hybrid")) hybrid = "bond";
-  if (force->angle && utils::strmatch(force->angle_style, "^hybrid")) hybrid = "angle";
-  if (force->dihedral && utils::strmatch(force->dihedral_style, "^hybrid")) hybrid = "dihedral";
-  if (force->improper && utils::strmatch(force->improper_style, "^hybrid")) hybrid = "improper";
-  if (hybrid)
-    error->all(FLERR,
-               "Fix pe_jump/async cannot split {}_style hybrid (it keeps its own copies of the "
-               "topology lists): use one {} style with several types",
-               hybrid, hybrid);
 
   // the interactions among atoms outside the fix group are evaluated only
   // at coarse nodes, for the slow atoms: nothing else may integrate them
@@ -446,7 +436,9 @@ void FixPEJumpAsync::store_start_node()
 double FixPEJumpAsync::node_cost()
 {
   const auto which = split->active();
-  return (which == InteractionSplit::NONE) ? 1.0 : split->fraction(which);
+  return ((which == InteractionSplit::NONE) || (which == InteractionSplit::ALL))
+      ? 1.0
+      : split->fraction(which);
 }
 
 /* ----------------------------------------------------------------------
@@ -638,7 +630,9 @@ void FixPEJumpAsync::final_integrate()
   tnow = coarse_end ? 0.0 : coarse_step;
   if (!coarse_end && step_observed()) catch_up_all();
 
+  split->activate(InteractionSplit::ALL);
   tally_at_node();
+  split->restore();
   evals_total += evals_step;
   cached_step = -1;
 

@@ -18,6 +18,7 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "utils.h"
 
 #include <algorithm>
 
@@ -27,7 +28,7 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 InteractionSplit::InteractionSplit(LAMMPS *lmp, int group, int fast) :
-    Pointers(lmp), groupbit(group), finebit(fast), current(NONE)
+    Pointers(lmp), groupbit(group), finebit(fast), current(NONE), hybrid_topology(0), saved_ago(0)
 {
   frac[FINE] = frac[COARSE] = 0.0;
   topo[0] = {0, &neighbor->nbondlist, &neighbor->bondlist, 2, 0, nullptr, 0};
@@ -96,6 +97,10 @@ void InteractionSplit::build()
   topo[1].on = molecular && force->angle;
   topo[2].on = molecular && force->dihedral;
   topo[3].on = molecular && force->improper;
+  hybrid_topology = (topo[0].on && utils::strmatch(force->bond_style, "^hybrid")) ||
+      (topo[1].on && utils::strmatch(force->angle_style, "^hybrid")) ||
+      (topo[2].on && utils::strmatch(force->dihedral_style, "^hybrid")) ||
+      (topo[3].on && utils::strmatch(force->improper_style, "^hybrid"));
   for (auto &t : topo) {
     if (t.on) {
       split_topology(t);
@@ -191,6 +196,12 @@ void InteractionSplit::split_topology(TopoList &t)
 void InteractionSplit::activate(Subset which)
 {
   restore();
+  if (hybrid_topology) {
+    saved_ago = neighbor->ago;
+    neighbor->ago = 0;
+  }
+  current = which;
+  if (which == ALL) return;
   for (auto &p : pairs) {
     p.inum = p.list->inum;
     p.ilist = p.list->ilist;
@@ -206,7 +217,6 @@ void InteractionSplit::activate(Subset which)
     *t.count = (which == FINE) ? t.nfine : t.nfull - t.nfine;
     *t.list = (which == FINE) ? t.full : t.full + t.nfine;
   }
-  current = which;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -214,6 +224,11 @@ void InteractionSplit::activate(Subset which)
 void InteractionSplit::restore()
 {
   if (current == NONE) return;
+  if (hybrid_topology) neighbor->ago = saved_ago;
+  if (current == ALL) {
+    current = NONE;
+    return;
+  }
   for (auto &p : pairs) {
     p.list->inum = p.inum;
     p.list->ilist = p.ilist;

@@ -33,7 +33,9 @@ namespace PEJump {
 
   class InteractionSplit : protected Pointers {
    public:
-    enum Subset { FINE = 0, COARSE = 1, NONE = 2 };
+    // ALL: the complete lists, for a complete evaluation after subsets were
+    // active (hybrid bonded styles then sort their sub-style lists again)
+    enum Subset { FINE = 0, COARSE = 1, NONE = 2, ALL = 3 };
 
     InteractionSplit(class LAMMPS *, int groupbit, int finebit);
     ~InteractionSplit() override;
@@ -70,6 +72,11 @@ namespace PEJump {
    private:
     int groupbit, finebit;
     Subset current;
+    // hybrid bonded styles sort the topology lists into sub-style lists only
+    // at a neighbor list build (neighbor->ago == 0): while a subset is
+    // active, ago reads 0 so that they sort the subset
+    int hybrid_topology;
+    int saved_ago;
     double frac[2];
 
     // one pair neighbor list, its original arrays and both subsets

@@ -65,6 +65,13 @@ std::vector<double> chain_at(double T, double hf, int K, const std::string &rule
   return chain_q(s);
 }
 
+std::vector<double> chain_q_at_start()
+{
+  Sim s;
+  chain(s);
+  return chain_q(s);
+}
+
 std::string error_of(const std::vector<std::string> &setup, const std::string &failing)
 {
   Sim s;
@@ -78,6 +85,33 @@ std::string error_of(const std::vector<std::string> &setup, const std::string &f
 }
 
 }    // namespace
+
+/* ----------------------------------------------------------------------
+   hybrid styles are split like plain ones: the paper's slow/fast chain
+   with bond_style hybrid harmonic class2 (stiff springs harmonic) and
+   pair_style hybrid equals the chain with one bond style
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, HybridStylesEqualOneStyle)
+{
+  for (const std::string rule : {"midpoint", "lobatto 3"}) {
+    std::vector<double> one, hybrid;
+    for (const bool use_hybrid : {false, true}) {
+      Sim s;
+      chain(s);
+      if (use_hybrid)
+        s.cmds({"bond_style hybrid harmonic class2",
+                fmt::format("bond_coeff 1 harmonic {:.17g} 1.5", 0.25 * OMEGA2),
+                "bond_coeff 2 class2 1.5 0.0 0.0 1.0", "pair_style hybrid zero 1.0",
+                "pair_coeff * * zero"});
+      s.cmds({"fix 1 chain pe_jump/async 10 fast quadrature " + rule, "timestep 2e-3", "thermo 0",
+              "run 1000 post no"});
+      (use_hybrid ? hybrid : one) = chain_q(s);
+    }
+    EXPECT_LT(max_diff(one, hybrid), 1e-13) << rule;
+    EXPECT_GT(max_diff(one, chain_q_at_start()), 1e-2) << rule;    // the chain moved
+  }
+}
 
 /* ----------------------------------------------------------------------
    classes on the paper's chain: q_1, q_2 fast, q_3 mixed, q_4..q_6 slow
@@ -437,10 +471,9 @@ TEST(PEJumpAsync, BadInputGivesClearErrors)
       ContainsRegex("must be the only time integration fix \\(found fix 2 nve\\)"));
   EXPECT_THAT(error_of(with({"fix 1 all pe_jump/async 5 fast", "run_style respa 2 2"}), "run 1"),
               ContainsRegex("does not support run_style respa"));
-  EXPECT_THAT(error_of(with({"bond_style hybrid harmonic", "bond_coeff 1 harmonic 1 1",
-                             "fix 1 all pe_jump/async 5 fast"}),
-                       "run 1"),
-              ContainsRegex("cannot split bond_style hybrid"));
+  EXPECT_THAT(
+      error_of(with({"fix 1 all pe_jump/async 5 fast", "fix 2 all addforce 1 0 0"}), "run 1"),
+      ContainsRegex("cannot yet be combined with fix 2 \\(addforce\\)"));
   const std::string sw = std::string(PEJUMP_LAMMPS_POTENTIALS) + "/Si.sw";
   const std::vector<std::string> silicon = {"units metal",
                                             "lattice diamond 5.431",
