@@ -28,6 +28,7 @@
 #include "fix_pe_jump_async.h"
 
 #include "atom.h"
+#include "bond.h"
 #include "comm.h"
 #include "error.h"
 #include "force.h"
@@ -57,9 +58,9 @@ static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, true), nfine(1), finebit(0), clockbit(0), fine_index(0),
-    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), split(nullptr), facc(nullptr),
-    fstart_coarse(nullptr), klass(nullptr), tpos(nullptr), tnow(0.0), fcoarse(nullptr),
-    nmax_coarse(0)
+    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0), split(nullptr),
+    facc(nullptr), fstart_coarse(nullptr), klass(nullptr), tpos(nullptr), tnow(0.0),
+    fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -139,6 +140,20 @@ void FixPEJumpAsync::init()
                "Fix pe_jump/async cannot split k-space ({}) into slow and fast interactions: "
                "use fix pe_jump",
                force->kspace_style);
+  if (atom->peri_flag)
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split peridynamic interactions (atom style {}): their "
+               "bonds are kept in partner lists of the pair style, not in the neighbor lists. Use "
+               "fix pe_jump",
+               atom->atom_style);
+  // a bond style whose bonds can break (partial_flag) changes the topology
+  // and may keep data per entry of the bond list, whose order the split
+  // changes
+  if (force->bond && force->bond->partial_flag && (atom->molecular != Atom::ATOMIC))
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split bond style {}: its bonds can break, and the split "
+               "reorders the bond list. Use fix pe_jump",
+               force->bond_style);
 
   // the interactions among atoms outside the fix group are evaluated only
   // at coarse nodes, for the slow atoms: nothing else may integrate them
@@ -160,6 +175,8 @@ void FixPEJumpAsync::init()
                  "forces: a slow atom's fine and coarse forces are sampled apart. Hold atoms by "
                  "leaving them out of the fix group (frozen scenery), or use fix pe_jump",
                  ifix->id, ifix->style);
+
+  topology_at_setup = topology_count();
 
   // the fast group must be a non-empty part of the fix group
 
@@ -219,12 +236,30 @@ void FixPEJumpAsync::assign_buffer()
 }
 
 /* ----------------------------------------------------------------------
+   number of bonds, angles, dihedrals and impropers of the system
+------------------------------------------------------------------------- */
+
+bigint FixPEJumpAsync::topology_count() const
+{
+  if (atom->molecular == Atom::ATOMIC) return 0;
+  return atom->nbonds + atom->nangles + atom->ndihedrals + atom->nimpropers;
+}
+
+/* ----------------------------------------------------------------------
    the lists were rebuilt: split them again (the clocks of the atoms never
    change, so the split does not depend on when it is done)
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::post_neighbor()
 {
+  // the classes of the interactions hold for the whole run: the topology
+  // must not change (fix bond/create, bond/break, ...)
+  if (topology_count() != topology_at_setup)
+    error->all(FLERR,
+               "Fix pe_jump/async: the bonds, angles, dihedrals or impropers changed during the "
+               "run (from {} to {}), e.g. by a fix that creates or breaks bonds: the "
+               "interaction split cannot follow. Use fix pe_jump",
+               topology_at_setup, topology_count());
   split->build();
   split_calls = neighbor->ncalls;
   find_slow();    // atoms are reordered only when the lists are rebuilt
@@ -346,6 +381,11 @@ void FixPEJumpAsync::setup(int vflag)
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
+  if (!split->pair_stays_in_lists())
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split pair style {}: it computes forces that are not in "
+               "its neighbor lists (e.g. from partner lists of its own). Use fix pe_jump",
+               force->pair_style);
   // start nodes of slow atoms inside a coarse step cannot be taken again:
   // new atoms take theirs at their first evaluation
   fresh_atoms = 0;

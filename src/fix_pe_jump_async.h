@@ -70,6 +70,7 @@ class FixPEJumpAsync : public FixPEJump {
   double stats_slow[2];               // largest |v|^2, |[v]|^2 of the local slow atoms
   std::vector<int> *reverse_flags;    // reverse communication carries these flags
   bigint split_calls;                 // neighbor->ncalls when the interactions were split
+  bigint topology_at_setup;           // bonds, angles, ... when the run started
 
   PEJump::InteractionSplit *split;
 
@@ -110,6 +111,7 @@ class FixPEJumpAsync : public FixPEJump {
   std::string instability_advice() const override;
   bool can_reverse() const override;
 
+  bigint topology_count() const;
   void assign_buffer();
   void find_slow();
   void find_moving();

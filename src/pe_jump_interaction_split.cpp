@@ -193,6 +193,35 @@ void InteractionSplit::split_topology(TopoList &t)
 
 /* ---------------------------------------------------------------------- */
 
+bool InteractionSplit::pair_stays_in_lists()
+{
+  if (!force->pair || !force->pair->compute_flag || pairs.empty()) return true;
+  restore();
+  double **f = atom->f;
+  const int nvalues = 3 * (atom->nlocal + atom->nghost);
+  std::vector<double> fkeep(nvalues);
+  if (nvalues) {
+    std::copy(&f[0][0], &f[0][0] + nvalues, fkeep.begin());
+    std::fill(&f[0][0], &f[0][0] + nvalues, 0.0);
+  }
+  for (auto &p : pairs) {
+    p.inum = p.list->inum;
+    p.list->inum = 0;
+  }
+  force->pair->compute(0, 0);
+  for (auto &p : pairs) p.list->inum = p.inum;
+
+  int local = 0;
+  for (int n = 0; n < nvalues; n++)
+    if (f[0][n] != 0.0) local = 1;
+  if (nvalues) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
+  int global = 0;
+  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
+  return !global;
+}
+
+/* ---------------------------------------------------------------------- */
+
 void InteractionSplit::activate(Subset which)
 {
   restore();

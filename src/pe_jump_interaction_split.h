@@ -57,6 +57,11 @@ namespace PEJump {
     void restore();
     Subset active() const { return current; }
 
+    // true if the pair style computes forces only from its neighbor lists:
+    // evaluated once with empty lists, it must give no force (a style with
+    // partner lists of its own, e.g. peri, cannot be split). Collective
+    bool pair_stays_in_lists();
+
     // fraction of all interactions that a subset holds (global)
     double fraction(Subset which) const { return frac[which]; }
 

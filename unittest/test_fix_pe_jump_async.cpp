@@ -642,3 +642,84 @@ TEST(PEJumpAsync, VelocityReversalAtCoarseNodesOnly)
     }
   }
 }
+
+/* ----------------------------------------------------------------------
+   force fields that cannot be split are refused by what they do, not by
+   their names: a pair style that computes forces outside its neighbor
+   lists, bonds that can break (bond style partial_flag), peridynamic
+   partner lists (atom style peri), a topology that changes during the run
+------------------------------------------------------------------------- */
+
+namespace {
+// lj/cut plus a force on the first owned atom that is in no neighbor list
+class PairOffList : public LAMMPS_NS::PairLJCut {
+ public:
+  using PairLJCut::PairLJCut;
+  void compute(int eflag, int vflag) override
+  {
+    PairLJCut::compute(eflag, vflag);
+    if (atom->nlocal) atom->f[0][0] += 1.0;
+  }
+};
+LAMMPS_NS::Pair *pair_offlist_creator(LAMMPS_NS::LAMMPS *lmp)
+{
+  return new PairOffList(lmp);
+}
+}    // namespace
+
+TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused)
+{
+  {
+    Sim s;
+    (*s.lmp->force->pair_map)["lj/cut/offlist"] = &pair_offlist_creator;
+    lj_liquid(s, 3);
+    s.cmds({"pair_style lj/cut/offlist 2.5", "pair_coeff 1 1 1.0 1.0 2.5",
+            "region f block 0 1 INF INF INF INF", "group fast region f",
+            "fix 1 all pe_jump/async 5 fast"});
+    EXPECT_THAT(error_of({}, ""), ContainsRegex("no error"));    // the helper itself
+    try {
+      s.cmd("run 1");
+      ADD_FAILURE() << "a pair style with forces outside its lists was not refused";
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      EXPECT_THAT(e.what(), ContainsRegex("computes forces that are not in its neighbor lists"));
+    }
+  }
+  const std::vector<std::string> chain_box = {"units lj",
+                                              "atom_style bond",
+                                              "region box block 0 10 0 10 0 10",
+                                              "create_box 1 box bond/types 1 extra/bond/per/atom 2",
+                                              "create_atoms 1 single 1 1 1",
+                                              "create_atoms 1 single 2 1 1",
+                                              "create_atoms 1 single 3 1 1",
+                                              "mass * 1.0",
+                                              "pair_style zero 2.5",
+                                              "pair_coeff * *",
+                                              "create_bonds single/bond 1 1 2",
+                                              "create_bonds single/bond 1 2 3",
+                                              "group fast id 1"};
+  auto with = [&](std::vector<std::string> extra) {
+    auto all = chain_box;
+    all.insert(all.end(), extra.begin(), extra.end());
+    return all;
+  };
+  EXPECT_THAT(error_of(with({"bond_style quartic", "bond_coeff 1 1200 -0.55 0.25 1.3 34.6878",
+                             "special_bonds lj 1 1 1", "pair_style lj/cut 1.12",
+                             "pair_coeff * * 1.0 1.0", "fix 1 all pe_jump/async 5 fast"}),
+                       "run 1"),
+              ContainsRegex("cannot split bond style quartic: its bonds can break"));
+  EXPECT_THAT(
+      error_of({"units si", "atom_style peri", "atom_modify map array", "lattice sc 0.0005",
+                "region target block 0 4 0 4 0 4", "create_box 1 target",
+                "create_atoms 1 region target", "pair_style peri/pmb",
+                "pair_coeff * * 1.6863e22 0.0015001 0.0005 0.25", "set group all density 2200",
+                "set group all volume 1.25e-10", "region f block 0 1 INF INF INF INF",
+                "group fast region f", "fix 1 all pe_jump/async 5 fast", "timestep 1e-7"},
+               "run 1"),
+      ContainsRegex("cannot split peridynamic interactions"));
+  // bonds deleted between runs are split anew at the next run
+  EXPECT_THAT(error_of(with({"bond_style harmonic", "bond_coeff 1 1.0 1.0",
+                             "fix 1 all pe_jump/async 5 fast", "run 2 post no",
+                             "delete_bonds all bond 1 remove special"}),
+                       "run 2 post no"),
+              ContainsRegex("no error"));
+}
