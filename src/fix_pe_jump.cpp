@@ -214,6 +214,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   FixPEJump::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
   fresh_atoms = others_bits = velocity_hooks = 0;
+  advance_pending = 0.0;
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
 }
@@ -247,7 +248,7 @@ FixPEJump::~FixPEJump()
 
 int FixPEJump::setmask()
 {
-  int mask = INITIAL_INTEGRATE | PRE_REVERSE | FINAL_INTEGRATE;
+  int mask = INITIAL_INTEGRATE | POST_NEIGHBOR | PRE_REVERSE | FINAL_INTEGRATE;
   if (adapt) mask |= END_OF_STEP;
   return mask;
 }
@@ -502,12 +503,53 @@ void FixPEJump::advance(double t)
   double **v = atom->v;
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
+  // on a step that rebuilds the lists, they are built (and atoms exchanged
+  // and sorted) at the end node q^{n+1}, as with fix nve, so that a run
+  // continued from a restart, which builds them there, reproduces the
+  // unbroken run; the atoms go back to the primary node after the build
+  const bool later = (t != h_step) && rebuild_due();
+  const double now = later ? h_step : t;
+  advance_pending = later ? t - h_step : 0.0;
   for (int i = 0; i < nlocal; i++)
     if (mask[i] & groupbit)
       for (int k = 0; k < 3; k++) {
         v[i][k] = vhalf[i][k];
-        x[i][k] += t * vhalf[i][k];
+        x[i][k] += now * vhalf[i][k];
       }
+}
+
+/* ----------------------------------------------------------------------
+   the lists were built at the end node: back to the primary node
+------------------------------------------------------------------------- */
+
+void FixPEJump::post_neighbor()
+{
+  if (advance_pending == 0.0) return;
+  double **x = atom->x;
+  const int *mask = atom->mask;
+  for (int i = 0; i < atom->nlocal; i++)
+    if (mask[i] & groupbit)
+      for (int k = 0; k < 3; k++) x[i][k] += advance_pending * vhalf[i][k];
+  advance_pending = 0.0;
+  comm->forward_comm();
+}
+
+/* ----------------------------------------------------------------------
+   true if the Verlet loop will rebuild the neighbor lists in this step
+   whatever the atoms' positions: the decision of Neighbor::decide() for
+   lists without a distance check (neigh_modify check no). With a distance
+   check the decision depends on the positions and is left to LAMMPS.
+------------------------------------------------------------------------- */
+
+bool FixPEJump::rebuild_due() const
+{
+  if (neighbor->dist_check || neighbor->build_once) return false;
+  const bigint now = update->ntimestep;
+  if (output->restart_flag && (now == output->next_restart)) return true;
+  for (const auto *ifix : modify->get_fix_list())
+    if (ifix->force_reneighbor && (now == ifix->next_reneighbor)) return true;
+  const int ago = neighbor->ago + 1;
+  return (ago >= neighbor->delay) && (ago % neighbor->every == 0);
 }
 
 /* ---------------------------------------------------------------------- */

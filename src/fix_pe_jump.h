@@ -40,6 +40,7 @@ class FixPEJump : public Fix {
   void init() override;
   void setup(int) override;
   void setup_pre_reverse(int, int) override;
+  void post_neighbor() override;
   void initial_integrate(int) override;
   void pre_reverse(int, int) override;
   void final_integrate() override;
@@ -121,6 +122,7 @@ class FixPEJump : public Fix {
   int fresh_atoms;              // 1 if atoms were created since the last setup (this rank)
   int others_bits;              // group bits of other time integrators
   int velocity_hooks;           // hooks of other fixes that may change velocities
+  double advance_pending;       // free flight left for after this step's list build
   std::vector<Fix *> adders;    // other fixes that add forces (impulses)
   int use_copy;                 // split by copying f before reverse communication
   int eflag_step, vflag_step;
@@ -153,6 +155,7 @@ class FixPEJump : public Fix {
   void finish_check(const double *local);
   double node_excursion(double **xhold, double lo, double hi, const AtomList *only) const;
   void tally_at_node();
+  bool rebuild_due() const;
   bool step_observed() const;
   bool tally_step() const;
   void choose_next_dt();

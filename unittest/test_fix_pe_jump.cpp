@@ -480,6 +480,40 @@ TEST(PEJump, SplitRunsAndRestartsAreExact)
   }
 }
 
+// with "neigh_modify check no" the lists are rebuilt every N steps whatever
+// the atoms do; a run continued from a restart (lists built at the node
+// q^n) reproduces the unbroken run only if that one built its lists at the
+// nodes too, as fix nve does
+TEST(PEJump, RestartUnderNeighCheckNoIsExact)
+{
+  for (const std::string rule : {"nve", "midpoint", "lobatto 3", "legendre 2"}) {
+    const std::string fix = (rule == "nve") ? "fix 1 all nve"
+                                            : "fix 1 all pe_jump quadrature " + rule;
+    const std::string lists = "neigh_modify every 10 delay 0 check no";
+    std::vector<double> unbroken, restarted;
+    {
+      Sim s;
+      lj_liquid(s, 6);
+      s.cmds({lists, fix, "timestep 0.005", "thermo 0", "run 2000 post no"});
+      unbroken = lj_state(s);
+    }
+    {
+      Sim s;
+      lj_liquid(s, 6);
+      s.cmds({lists, fix, "timestep 0.005", "thermo 0", "run 1000 post no",
+              "write_restart pe_jump_checkno.restart", "clear",
+              "read_restart pe_jump_checkno.restart", "neighbor 0.3 bin", lists, fix, "thermo 0",
+              "run 1000 post no"});
+      restarted = lj_state(s);
+      std::remove("pe_jump_checkno.restart");
+    }
+    double d = 0.0;
+    for (size_t i = 0; i < unbroken.size(); ++i)
+      d = std::max(d, std::fabs(restarted[i] - unbroken[i]));
+    EXPECT_EQ(d, 0.0) << rule;
+  }
+}
+
 TEST(PEJump, VelocityChangeRestartsSchemeWithLogMessage)
 {
   Sim s(MPI_COMM_WORLD, false);
