@@ -52,7 +52,7 @@ static constexpr double STOP_GROWTH = 1.0e6;        // jump growth that is alway
 static constexpr double HINT_GROWTH = 2.0;          // ... that is instability if atoms move far
 static constexpr int ADAPT_SAMPLES = 64;            // trial steps between dtmax and dtmin
 static constexpr int ADAPT_BISECT = 40;             // bisections of the largest admissible step
-static constexpr double AUTO_DAMP_STEPS = 100.0;    // damp auto: parasitic damping time in steps
+static constexpr double AUTO_DAMP_STEPS = 1000.0;   // damp auto: parasitic damping time in steps
 
 /* ---------------------------------------------------------------------- */
 
