@@ -45,14 +45,14 @@ using namespace FixConst;
 using PEJump::ForceSampler;
 using PEJump::Quadrature;
 
-static constexpr double ADAPT_GROWTH = 1.05;        // largest step growth factor per step
-static constexpr double ADAPT_SAFETY = 0.5;         // aim at this fraction of the bound
-static constexpr double BLOWUP = 1.0e300;           // stands for a non-finite value in reductions
-static constexpr double STOP_GROWTH = 1.0e6;        // jump growth that is always instability
-static constexpr double HINT_GROWTH = 2.0;          // ... that is instability if atoms move far
-static constexpr int ADAPT_SAMPLES = 64;            // trial steps between dtmax and dtmin
-static constexpr int ADAPT_BISECT = 40;             // bisections of the largest admissible step
-static constexpr double AUTO_DAMP_STEPS = 1000.0;   // damp auto: parasitic damping time in steps
+static constexpr double ADAPT_GROWTH = 1.05;         // largest step growth factor per step
+static constexpr double ADAPT_SAFETY = 0.5;          // aim at this fraction of the bound
+static constexpr double BLOWUP = 1.0e300;            // stands for a non-finite value in reductions
+static constexpr double STOP_GROWTH = 1.0e6;         // jump growth that is always instability
+static constexpr double HINT_GROWTH = 2.0;           // ... that is instability if atoms move far
+static constexpr int ADAPT_SAMPLES = 64;             // trial steps between dtmax and dtmin
+static constexpr int ADAPT_BISECT = 40;              // bisections of the largest admissible step
+static constexpr double AUTO_DAMP_STEPS = 1000.0;    // damp auto: parasitic damping time in steps
 
 /* ---------------------------------------------------------------------- */
 
@@ -320,15 +320,10 @@ void FixPEJump::sort_other_fixes()
   std::vector<Fix *> preparations, projections;
   adders.clear();
   others_bits = 0;
-  // hooks where another fix may change velocities between two steps of
-  // this fix, or inside a step
-  constexpr int BETWEEN = INITIAL_INTEGRATE | FINAL_INTEGRATE | END_OF_STEP;
-  constexpr int INSIDE = POST_INTEGRATE | PRE_EXCHANGE | PRE_NEIGHBOR | POST_NEIGHBOR | PRE_FORCE |
-      PRE_REVERSE | POST_FORCE;
   velocity_hooks = 0;
   for (auto *ifix : modify->get_fix_list()) {
     if (ifix == this) continue;
-    velocity_hooks |= ifix->setmask() & (BETWEEN | INSIDE);
+    velocity_hooks |= ifix->setmask() & (BETWEEN_STEPS | INSIDE_STEP);
     if (ifix->setmask() & PRE_FORCE) preparations.push_back(ifix);
     if (ifix->time_integrate) {
       others_bits |= ifix->groupbit;
@@ -470,7 +465,7 @@ void FixPEJump::node_impulses()
   const int nlocal = atom->nlocal;
   const bool half_kick = split_primary && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
-  const bool compare = velocity_hooks & (INITIAL_INTEGRATE | FINAL_INTEGRATE | END_OF_STEP);
+  const bool compare = velocity_hooks & BETWEEN_STEPS;
   if (!compare && !half_kick) return;
   bool changed = half_kick;
   for (int i = 0; i < nlocal; i++) {
@@ -672,7 +667,7 @@ void FixPEJump::final_integrate()
   evals_step = 1.0;
 
   // velocities changed by other fixes during the step (wall/reflect, ...)
-  if (velocity_hooks & ~(INITIAL_INTEGRATE | FINAL_INTEGRATE | END_OF_STEP)) {
+  if (velocity_hooks & INSIDE_STEP) {
     double **v = atom->v;
     const int *mask = atom->mask;
     for (int i = 0; i < atom->nlocal; i++)

@@ -194,6 +194,13 @@ class FixPEJump : public Fix {
   virtual std::string instability_advice() const;    // what to do when unstable
   virtual bool can_reverse() const;                  // a velocity reversal can be continued
   static constexpr int NGLOBAL = 6;                  // values of the global restart state
+  // hooks of other fixes where they may change velocities: between two
+  // steps of this fix, or inside a step
+  static constexpr int BETWEEN_STEPS =
+      FixConst::INITIAL_INTEGRATE | FixConst::FINAL_INTEGRATE | FixConst::END_OF_STEP;
+  static constexpr int INSIDE_STEP = FixConst::POST_INTEGRATE | FixConst::PRE_EXCHANGE |
+      FixConst::PRE_NEIGHBOR | FixConst::POST_NEIGHBOR | FixConst::PRE_FORCE |
+      FixConst::PRE_REVERSE | FixConst::POST_FORCE;
 };
 
 }    // namespace LAMMPS_NS

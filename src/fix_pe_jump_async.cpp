@@ -58,9 +58,9 @@ static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, true), nfine(1), finebit(0), clockbit(0), fine_index(0),
-    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0), split(nullptr),
-    facc(nullptr), fstart_coarse(nullptr), klass(nullptr), tpos(nullptr), tnow(0.0),
-    fcoarse(nullptr), nmax_coarse(0)
+    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0),
+    velocity_changed(0), split(nullptr), facc(nullptr), fstart_coarse(nullptr), klass(nullptr),
+    tpos(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -236,6 +236,46 @@ void FixPEJumpAsync::assign_buffer()
 }
 
 /* ----------------------------------------------------------------------
+   fix pe_jump takes a velocity that another fix changed as an impulse;
+   here a slow atom has no node velocity inside a coarse step, so such
+   changes are refused. The atoms on the fine clock are checked every fine
+   step, all atoms at coarse nodes, where the ranks agree on the outcome.
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::node_impulses()
+{
+  if (!(velocity_hooks & (BETWEEN_STEPS | INSIDE_STEP))) return;
+  if (velocity_hooks & BETWEEN_STEPS) note_velocity_changes(fine_index ? &fast_atoms : nullptr);
+  if (fine_index) return;
+  int any = 0;
+  MPI_Allreduce(&velocity_changed, &any, 1, MPI_INT, MPI_MAX, world);
+  if (any)
+    error->all(FLERR,
+               "Fix pe_jump/async: another fix (a thermostat, fix momentum, fix wall/reflect, "
+               "...) changed velocities during the run before step {}; pe_jump/async does not "
+               "take velocity changes yet. Use fix pe_jump",
+               update->ntimestep);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
+{
+  double **v = atom->v;
+  const auto check = [&](int i) {
+    for (int k = 0; k < 3; k++)
+      if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) velocity_changed = 1;
+  };
+  if (only) {
+    for (const int i : *only) check(i);
+  } else {
+    const int *mask = atom->mask;
+    for (int i = 0; i < atom->nlocal; i++)
+      if (mask[i] & groupbit) check(i);
+  }
+}
+
+/* ----------------------------------------------------------------------
    number of bonds, angles, dihedrals and impropers of the system
 ------------------------------------------------------------------------- */
 
@@ -389,6 +429,7 @@ void FixPEJumpAsync::setup(int vflag)
   // start nodes of slow atoms inside a coarse step cannot be taken again:
   // new atoms take theirs at their first evaluation
   fresh_atoms = 0;
+  velocity_changed = 0;
   FixPEJump::setup(vflag);
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
@@ -579,6 +620,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 
 void FixPEJumpAsync::final_integrate()
 {
+  if (velocity_hooks & INSIDE_STEP) note_velocity_changes(&fast_atoms);
   grow_work();
   if (nmax_coarse < atom->nmax) {
     nmax_coarse = atom->nmax;

@@ -71,6 +71,7 @@ class FixPEJumpAsync : public FixPEJump {
   std::vector<int> *reverse_flags;    // reverse communication carries these flags
   bigint split_calls;                 // neighbor->ncalls when the interactions were split
   bigint topology_at_setup;           // bonds, angles, ... when the run started
+  int velocity_changed;               // another fix changed a velocity (this rank)
 
   PEJump::InteractionSplit *split;
 
@@ -102,7 +103,7 @@ class FixPEJumpAsync : public FixPEJump {
   std::vector<double> lag;            // work: time by which an atom lags behind
 
   void start_scheme(const char *, bool) override;
-  void node_impulses() override {}
+  void node_impulses() override;
   double kick_step(int) const override;
   void store_start_node() override;
   double node_cost() override;
@@ -112,6 +113,7 @@ class FixPEJumpAsync : public FixPEJump {
   bool can_reverse() const override;
 
   bigint topology_count() const;
+  void note_velocity_changes(const AtomList *);
   void assign_buffer();
   void find_slow();
   void find_moving();

@@ -723,3 +723,30 @@ TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused)
                        "run 2 post no"),
               ContainsRegex("no error"));
 }
+
+/* ----------------------------------------------------------------------
+   velocities changed by other fixes during a run are refused (fix pe_jump
+   takes them as impulses); output fixes at the end of a step are fine
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused)
+{
+  const auto run_with = [](const std::string &other) {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds({"region f block 0 1 INF INF INF INF", "group fast region f",
+            "fix 1 all pe_jump/async 5 fast", other, "timestep 0.004", "thermo 0"});
+    s.cmd("run 50 post no");
+  };
+  EXPECT_NO_THROW(run_with("fix 2 all ave/time 1 10 10 c_thermo_temp"));
+  for (const std::string other :
+       {"fix 2 all temp/berendsen 1.0 1.0 0.1", "fix 2 all momentum 1 linear 1 1 1",
+        "fix 2 all temp/rescale 7 1.0 1.0 0.01 1.0"}) {
+    try {
+      run_with(other);
+      ADD_FAILURE() << other << " was not refused";
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      EXPECT_THAT(e.what(), ContainsRegex("changed velocities during the run")) << other;
+    }
+  }
+}

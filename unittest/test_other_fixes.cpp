@@ -336,3 +336,26 @@ TEST(PEJumpOtherFixes, ShakeAndRattleAreRefused)
     }
   }
 }
+
+/* ----------------------------------------------------------------------
+   fix rigid on other atoms: a rigid cluster in an LJ liquid keeps working
+   beside fix pe_jump lobatto 2 (energy as with fix nve), and a rule that
+   evaluates forces inside the step is refused
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, RigidBodyBesideLobatto2)
+{
+  const auto spread = [](const std::string &integrator) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"region ball sphere 2.8 2.8 2.8 0.9", "group ball region ball",
+            "group liquid subtract all ball", "fix 1 liquid " + integrator,
+            "fix 2 ball rigid single", "timestep 0.004", "thermo 0", "run 0 post no"});
+    EXPECT_GT(s.eval("count(ball)"), 3.0);
+    return energy_spread(s, "etotal", 10, 50);
+  };
+  const double nve = spread("nve");
+  const double lob2 = spread("pe_jump quadrature lobatto 2");
+  EXPECT_LT(lob2, 2.0 * nve) << "pe_jump lobatto 2 " << lob2 << ", nve " << nve;
+  EXPECT_THROW(spread("pe_jump"), LAMMPS_NS::LAMMPSException);
+}
