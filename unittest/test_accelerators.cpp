@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -15,41 +16,57 @@ using namespace PEJumpTest;
 
 namespace {
 
-// bonded fcc crystal (pair lj/cut and harmonic bonds to the 12 neighbours),
-// run 200 steps; positions by atom ID
-std::vector<double> bonded_run(const std::string &accelerator, const std::string &fix)
+// runs a system: accelerator commands first, then the system, the fix and
+// the run; positions of all atoms by atom ID
+using Builder = std::function<void(Sim &)>;
+
+std::vector<double> positions(Sim &s)
+{
+  std::vector<double> x;
+  for (int id = 1; id <= s.lmp->atom->natoms; id++)
+    for (int k = 0; k < 3; k++) x.push_back(s.x(id, k));
+  return x;
+}
+
+std::vector<double> accelerated_run(const std::string &accelerator, const Builder &system,
+                                    const std::string &fix, const std::string &run)
 {
   Sim s;
   if (accelerator == "opt")
     s.cmd("suffix opt");
   else if (!accelerator.empty())
     s.cmds({"package " + accelerator, "suffix omp"});
-  s.cmds({"units lj",
-          "atom_style bond",
-          "atom_modify map array",
-          "lattice fcc 0.8442",
+  system(s);
+  s.cmds({fix, "thermo 0", run});
+  return positions(s);
+}
+
+// bonded fcc crystal: pair lj/cut and harmonic bonds to the 12 neighbours
+void bonded_crystal(Sim &s)
+{
+  s.cmds({"units lj", "atom_style bond", "atom_modify map array", "lattice fcc 0.8442",
           "region box block 0 4 0 4 0 4",
           "create_box 1 box bond/types 1 extra/bond/per/atom 14 extra/special/per/atom 50",
-          "create_atoms 1 box",
-          "mass 1 1.0",
-          "velocity all create 1.0 87287 loop geom",
-          "pair_style lj/cut 2.5",
-          "pair_coeff 1 1 1.0 1.0 2.5",
-          "bond_style harmonic",
-          "bond_coeff 1 20.0 1.09",
-          "special_bonds lj 0.0 1.0 1.0",
-          "create_bonds many all all 1 1.0 1.2",
-          "neighbor 0.3 bin",
-          "region fast block 0 1.5 INF INF INF INF",
-          "group fast region fast",
-          fix,
-          "timestep 0.002",
-          "thermo 0",
-          "run 200 post no"});
-  std::vector<double> x;
-  for (int id = 1; id <= s.lmp->atom->natoms; id++)
-    for (int k = 0; k < 3; k++) x.push_back(s.x(id, k));
-  return x;
+          "create_atoms 1 box", "mass 1 1.0", "velocity all create 1.0 87287 loop geom",
+          "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5", "bond_style harmonic",
+          "bond_coeff 1 20.0 1.09", "special_bonds lj 0.0 1.0 1.0",
+          "create_bonds many all all 1 1.0 1.2", "neighbor 0.3 bin",
+          "region fast block 0 1.5 INF INF INF INF", "group fast region fast", "timestep 0.002"});
+}
+
+void liquid(Sim &s)
+{
+  lj_liquid(s, 3);
+  s.cmds({"region fast block 0 1 INF INF INF INF", "group fast region fast", "timestep 0.005"});
+}
+
+// the paper's Fermi-Pasta-Ulam chain (bond_style hybrid harmonic class2)
+void fpu(Sim &s)
+{
+  double q[6], p[6];
+  fpu_gni_values(50.0, q, p);
+  fpu_chain(s, 50.0, q, p);
+  s.cmds({"group fast id 2:4", "timestep 0.001"});
 }
 
 double max_diff(const std::vector<double> &a, const std::vector<double> &b)
@@ -63,19 +80,41 @@ double max_diff(const std::vector<double> &a, const std::vector<double> &b)
 
 TEST(PEJumpAccelerators, SameTrajectoryWithOmpAndOptStyles)
 {
-  const std::vector<std::string> fixes = {"fix 1 all pe_jump",
-                                          "fix 1 all pe_jump quadrature lobatto 3",
-                                          "fix 1 all pe_jump quadrature lobatto 3 sample pair",
-                                          "fix 1 all pe_jump quadrature lobatto 3 sample bond",
-                                          "fix 1 all pe_jump quadrature legendre 2 sample pair",
-                                          "fix 1 all pe_jump/async 5 fast",
-                                          "fix 1 all pe_jump/async 5 fast quadrature lobatto 3"};
-  for (const auto &fix : fixes) {
-    const auto plain = bonded_run("", fix);
-    for (const std::string accelerator : {"omp 1", "omp 2", "opt"}) {
-      const auto accelerated = bonded_run(accelerator, fix);
-      // the thread count changes the order of the force sums: round-off only
-      EXPECT_LT(max_diff(plain, accelerated), 1e-10) << fix << " with " << accelerator;
+  struct Case {
+    std::string name;
+    Builder system;
+    std::vector<std::string> fixes;
+    std::string run;
+  };
+  const std::vector<Case> cases = {
+      {"bonded crystal",
+       bonded_crystal,
+       {"fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
+        "fix 1 all pe_jump quadrature lobatto 3 sample pair",
+        "fix 1 all pe_jump quadrature lobatto 3 sample bond",
+        "fix 1 all pe_jump quadrature legendre 2 sample pair", "fix 1 all pe_jump/async 5 fast",
+        "fix 1 all pe_jump/async 5 fast quadrature lobatto 3"},
+       "run 200 post no"},
+      {"LJ liquid",
+       liquid,
+       {"fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
+        "fix 1 all pe_jump/async 4 fast quadrature lobatto 3"},
+       "run 200 post no"},
+      {"FPU chain",
+       fpu,
+       {"fix 1 chain pe_jump quadrature lobatto 3",
+        "fix 1 chain pe_jump quadrature lobatto 3 sample bond",
+        "fix 1 chain pe_jump/async 10 fast quadrature lobatto 5"},
+       "run 2000 post no"}};
+  for (const auto &c : cases) {
+    for (const auto &fix : c.fixes) {
+      const auto plain = accelerated_run("", c.system, fix, c.run);
+      for (const std::string accelerator : {"omp 1", "omp 2", "opt"}) {
+        const auto accelerated = accelerated_run(accelerator, c.system, fix, c.run);
+        // the thread count changes the order of the force sums: round-off only
+        EXPECT_LT(max_diff(plain, accelerated), 1e-10)
+            << c.name << ": " << fix << " with " << accelerator;
+      }
     }
   }
 }
