@@ -88,6 +88,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
     if (strcmp(arg[iarg], "quadrature") == 0) {
       if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature", error);
       const std::string which = arg[iarg + 1];
+      auto_tol = 0.0;    // the last quadrature keyword wins
       if (which == "midpoint") {
         family = Quadrature::LEGENDRE;
         npoints = 1;
@@ -270,6 +271,18 @@ void FixPEJump::init()
 
   if (utils::strmatch(update->integrate_style, "^respa"))
     error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
+  // the jump relation needs a step that goes forward: with h = 0 it flips
+  // the jump every step, and a change of sign excites the parasitic mode
+  if (!(update->dt > 0.0))
+    error->all(FLERR,
+               "Fix {} needs a timestep > 0, got {}: to run backwards in time, reverse the "
+               "velocities (velocity all scale -1.0), which the fix continues exactly",
+               style, update->dt);
+  if (adapt)
+    for (const auto &ifix : modify->get_fix_list())
+      if (utils::strmatch(ifix->style, "^dt/reset"))
+        error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them",
+                   style, ifix->id, ifix->style);
   if (atom->torque_flag)
     error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
                atom->atom_style);
@@ -417,7 +430,17 @@ void FixPEJump::setup(int /*vflag*/)
   }
   fresh_atoms = 0;
   check_other_integrators();
-  if (adapt) energy_scale = fabs(pseudo_energy_now());
+  if (adapt) {
+    // the first step is taken with the timestep as given: keep it in range
+    const double dt = MIN(MAX(update->dt, adapt_dtmin), adapt_dtmax);
+    if (dt != update->dt) {
+      if (comm->me == 0)
+        utils::logmesg(lmp, "Fix {}: timestep {} is outside the adapt range [{}, {}]: using {}\n",
+                       style, update->dt, adapt_dtmin, adapt_dtmax, dt);
+      set_timestep(dt);
+    }
+    energy_scale = fabs(pseudo_energy_now());
+  }
   if (auto_tol > 0.0) {
     vprev = potential_now(sample_mask);
     c_pe->addstep(update->ntimestep + 1);
@@ -946,7 +969,24 @@ void FixPEJump::refresh_start_nodes()
 {
   int any = 0;
   MPI_Allreduce(&fresh_atoms, &any, 1, MPI_INT, MPI_MAX, world);
-  if (any && rule->has_end_nodes()) store_start_node();
+  if (!any || !rule->has_end_nodes()) return;
+
+  // the new atoms (start node still unknown) also get the initial kick
+  AtomList fresh;
+  const int *mask = atom->mask;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & groupbit) && std::isnan(fstart[i][0])) fresh.push_back(i);
+  store_start_node();
+  if (init_style != INIT_KICK) return;
+  double **v = atom->v;
+  for (const int i : fresh) {
+    const double dtfm = force->ftm2v * update->dt * inverse_mass_of(i);
+    for (int k = 0; k < 3; k++) {
+      jump[i][k] = dtfm * fstart[i][k];
+      vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
+      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
+    }
+  }
 }
 
 /* ----------------------------------------------------------------------
@@ -1410,10 +1450,17 @@ void FixPEJump::choose_next_dt()
     if (hnew < 0.0) hnew = best;    // no step meets the bound: the smallest jump
   }
   hnew = MAX(hnew, adapt_dtmin);
-  if (hnew == update->dt) return;
+  if (hnew != update->dt) set_timestep(hnew);
+}
 
+/* ----------------------------------------------------------------------
+   change the time step the way fix dt/reset does
+------------------------------------------------------------------------- */
+
+void FixPEJump::set_timestep(double dt)
+{
   update->update_time();
-  update->dt = hnew;
+  update->dt = dt;
   update->dt_default = 0;
   if (force->pair) force->pair->reset_dt();
   for (auto &ifix : modify->get_fix_list()) ifix->reset_dt();

@@ -159,6 +159,7 @@ class FixPEJump : public Fix {
   bool step_observed() const;
   bool tally_step() const;
   void choose_next_dt();
+  void set_timestep(double);
   void compensate_step_change();
   void energies();
   void grow_work();

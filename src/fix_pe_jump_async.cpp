@@ -68,6 +68,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   const int ifast = group->find(arg[4]);
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
   finebit = group->bitmask[ifast];
+  fast_group = arg[4];
 
   if (adapt)
     error->all(FLERR,
@@ -178,6 +179,21 @@ void FixPEJumpAsync::init()
 
   topology_at_setup = topology_count();
 
+  // the fast group (and the fine-clock group of the buffer) are looked up
+  // again: a deleted group's bit may have gone to another group since
+  const int ifast = group->find(fast_group);
+  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted", fast_group);
+  finebit = group->bitmask[ifast];
+  clockbit = finebit;
+  if (buffer_layers > 0) {
+    const std::string clock_group = std::string(id) + "_fine_clock";
+    const int iclock = group->find(clock_group);
+    if (iclock < 0)
+      error->all(FLERR, "Fix pe_jump/async: its fine-clock group {} was deleted", clock_group);
+    clockbit = group->bitmask[iclock];
+  }
+  split->set_fine_bit(clockbit);
+
   // the fast group must be a non-empty part of the fix group
 
   const int *mask = atom->mask;
@@ -224,13 +240,22 @@ void FixPEJumpAsync::assign_buffer()
     else
       mask[i] &= ~clockbit;
   }
+  // each layer adds the slow partners of the fine clock; stop early when a
+  // layer adds no atom (everything reachable is on the fine clock)
   for (int layer = 0; layer < buffer_layers; layer++) {
     split->build();
     split->mark_fine_participants(participant);
     gather_flags(participant);
+    int added = 0;
     for (int i = 0; i < atom->nlocal; i++)
-      if (participant[i] && (mask[i] & groupbit)) mask[i] |= clockbit;
+      if (participant[i] && (mask[i] & groupbit) && !(mask[i] & clockbit)) {
+        mask[i] |= clockbit;
+        added = 1;
+      }
     comm->forward_comm(this);
+    int any = 0;
+    MPI_Allreduce(&added, &any, 1, MPI_INT, MPI_MAX, world);
+    if (!any) break;
   }
   split_calls = -1;    // split the lists again for the new clocks
 }

@@ -22,6 +22,8 @@ FixStyle(pe_jump/async,FixPEJumpAsync);
 
 #include "fix_pe_jump.h"
 
+#include <string>
+
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -63,6 +65,7 @@ class FixPEJumpAsync : public FixPEJump {
 
   int nfine;                          // K: fine steps per coarse step
   int finebit;                        // group bit of the fast group
+  std::string fast_group;             // its name, looked up again in init()
   int clockbit;                       // group bit of the atoms on the fine clock
   int fine_index;                     // fine steps done in the current coarse step
   double elapsed;                     // time elapsed in the current coarse step
