@@ -175,13 +175,10 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   rule = new Quadrature(family, npoints);
   sampler = new ForceSampler(lmp);
 
-  // quadrature auto needs the potential energy at every step: a compute pe
-  // asks the Verlet loop to tally it
   if (auto_tol > 0.0) {
     if (sample_mask != ForceSampler::ALL)
       error->all(FLERR, "Fix {} quadrature auto samples all force contributions", style);
     id_pe = utils::strdup(std::string(id) + "_pe");
-    modify->add_compute(fmt::format("{} all pe", id_pe));
   }
 
   time_integrate = 1;
@@ -216,8 +213,23 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
   fresh_atoms = others_bits = velocity_hooks = 0;
   advance_pending = 0.0;
-  atom->add_callback(Atom::GROW);
-  atom->add_callback(Atom::RESTART);
+  // a derived style registers its callbacks at the end of its own
+  // constructor, once all its arguments are accepted
+  if (!two_clocks) {
+    atom->add_callback(Atom::GROW);
+    atom->add_callback(Atom::RESTART);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   what the fix creates besides itself, once it exists: quadrature auto
+   needs the potential energy at every step, so a compute pe asks the
+   Verlet loop to tally it
+------------------------------------------------------------------------- */
+
+void FixPEJump::post_constructor()
+{
+  if (id_pe) modify->add_compute(fmt::format("{} all pe", id_pe));
 }
 
 /* ---------------------------------------------------------------------- */

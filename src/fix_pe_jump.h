@@ -35,6 +35,7 @@ class FixPEJump : public Fix {
  public:
   FixPEJump(class LAMMPS *, int, char **);
   ~FixPEJump() override;
+  void post_constructor() override;
 
   int setmask() override;
   void init() override;

@@ -86,11 +86,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
 
   counts[0] = counts[1] = counts[2] = 0.0;
   stats_slow[0] = stats_slow[1] = 0.0;
-  // with buffer layers the fine clock is a group of its own, kept with the
-  // atoms (and in restart files)
-  clockbit = finebit;
-  if (buffer_layers > 0)
-    clockbit = group->bitmask[group->find_or_create((std::string(id) + "_fine_clock").c_str())];
+  clockbit = finebit;    // with buffer layers: see post_constructor()
   comm_forward = 1;
   split = new InteractionSplit(lmp, groupbit, clockbit);
 
@@ -104,6 +100,19 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   nstate += 5 + (rule->has_end_nodes() ? 3 : 0);
   FixPEJumpAsync::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) FixPEJumpAsync::set_arrays(i);
+  atom->add_callback(Atom::GROW);
+  atom->add_callback(Atom::RESTART);
+}
+
+/* ----------------------------------------------------------------------
+   with buffer layers the fine clock is a group of its own, kept with the
+   atoms (and in restart files); init() looks it up
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::post_constructor()
+{
+  FixPEJump::post_constructor();
+  if (buffer_layers > 0) group->find_or_create((std::string(id) + "_fine_clock").c_str());
 }
 
 /* ---------------------------------------------------------------------- */

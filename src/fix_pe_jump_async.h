@@ -35,6 +35,7 @@ class FixPEJumpAsync : public FixPEJump {
  public:
   FixPEJumpAsync(class LAMMPS *, int, char **);
   ~FixPEJumpAsync() override;
+  void post_constructor() override;
 
   int setmask() override;
   void init() override;

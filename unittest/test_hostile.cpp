@@ -198,3 +198,35 @@ TEST(PEJumpHostile, AtomCreatedBetweenRunsWithLobatto)
   EXPECT_LT(std::fabs(moved - reference), 0.01 * std::fabs(reference))
       << "moved " << moved << ", fresh start " << reference;
 }
+
+/* ----------------------------------------------------------------------
+   a fix command refused by its constructor (an error caught by the
+   library caller) leaves nothing behind: no per-atom callbacks (a later
+   create_atoms crashed in AtomVec::grow), no compute, no group, and the
+   same fix ID can be used again
+------------------------------------------------------------------------- */
+
+TEST(PEJumpHostile, RefusedFixLeavesNothingBehind)
+{
+  for (const std::string bad :
+       {"fix 1 all pe_jump/async 0 fast", "fix 1 all pe_jump/async 5 fast quadrature auto 1e-6",
+        "fix 1 all pe_jump/async 5 fast buffer 1 adapt 1e-3 1e-4 1e-2",
+        "fix 1 all pe_jump quadrature auto 1e-6 sample pair"}) {
+    Sim s;
+    s.cmds({"units lj", "atom_style atomic", "atom_modify map array",
+            "region box block 0 20 0 20 0 20", "create_box 1 box",
+            "create_atoms 1 random 100 4711 NULL", "mass 1 1.0", "pair_style zero 1.0",
+            "pair_coeff * *", "group fast id 1:10"});
+    const int ngroups = s.lmp->group->ngroup;
+    EXPECT_THROW(s.cmd(bad), LAMMPS_NS::LAMMPSException) << bad;
+    EXPECT_EQ(s.lmp->group->ngroup, ngroups) << bad;
+    EXPECT_EQ(s.lmp->modify->get_compute_by_id("1_pe"), nullptr) << bad;
+    // enough new atoms to make the per-atom arrays grow
+    const int nmax = s.lmp->atom->nmax;
+    EXPECT_NO_THROW(s.cmd("create_atoms 1 random 20000 4712 NULL")) << bad;
+    EXPECT_GT(s.lmp->atom->nmax, nmax);
+    EXPECT_NO_THROW(s.cmds(
+        {"fix 1 all pe_jump quadrature auto 1e-6", "timestep 0.001", "thermo 0", "run 2 post no"}))
+        << bad;
+  }
+}
