@@ -211,7 +211,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 
   FixPEJump::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
-  fresh_atoms = others_bits = velocity_hooks = 0;
+  fresh_atoms = others_bits = velocity_hooks = damping = impulse_local = 0;
+  damp_rate = 0.0;
   advance_pending = 0.0;
   // a derived style registers its callbacks at the end of its own
   // constructor, once all its arguments are accepted
@@ -317,14 +318,17 @@ void FixPEJump::init()
     delete rule;
     rule = other;
   }
-  // other fixes that add forces (thermostats above all) drive the
-  // parasitic period-2 mode, which the scheme does not damp: damp it over
-  // damp_time (auto: AUTO_DAMP_STEPS steps when such fixes are present)
+  // other fixes that add forces or change velocities (thermostats above
+  // all) drive the parasitic period-2 mode, which the scheme does not damp:
+  // damp it over damp_time (auto: AUTO_DAMP_STEPS steps, from the start if
+  // fixes add forces, else from the first step where a velocity changed)
   damp_rate = 0.0;
   if (damp_time > 0.0)
     damp_rate = 1.0 / damp_time;
-  else if ((damp_time < 0.0) && !adders.empty())
+  else if (damp_time < 0.0)
     damp_rate = 1.0 / (AUTO_DAMP_STEPS * update->dt);
+  damping = (damp_time > 0.0) || ((damp_time < 0.0) && !adders.empty());
+  impulse_local = 0;
   if (id_pe) {
     c_pe = modify->get_compute_by_id(id_pe);
     if (!c_pe) error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
@@ -509,6 +513,7 @@ void FixPEJump::node_impulses()
       if (compare && (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k])) {
         vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
         changed = true;
+        impulse_local = 1;
       }
     if (half_kick && !std::isnan(fstart[i][0])) {
       const double dtfm = dth * inverse_mass_of(i);
@@ -755,7 +760,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   const bool end_kick = split_primary && keep_start;
   // parasitic damping: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
-  const double beta = MIN(1.0, damp_rate * fabs(h_step));
+  const double beta = damping ? MIN(1.0, damp_rate * fabs(h_step)) : 0.0;
   double vv = mag[0], jj = mag[1];
   const auto one = [&](int i) {
     const double dtfm = kick * inverse_mass_of(i);
@@ -1331,8 +1336,14 @@ double FixPEJump::node_excursion(double **xhold, double lo, double hi, const Ato
 
 void FixPEJump::finish_check(const double *local)
 {
-  double global[5];
-  MPI_Allreduce(local, global, 5, MPI_DOUBLE, MPI_MAX, world);
+  // the same reduction tells whether another fix changed a velocity: then
+  // damp auto damps the parasitic mode from now on in this run
+  double values[6] = {local[0], local[1], local[2],
+                      local[3], local[4], static_cast<double>(impulse_local)};
+  double global[6];
+  MPI_Allreduce(values, global, 6, MPI_DOUBLE, MPI_MAX, world);
+  impulse_local = 0;
+  if ((global[5] > 0.0) && (damp_time < 0.0)) damping = 1;
 
   // reference magnitude: the largest jump or velocity at the start of the run
   // (at the first step where anything moves)

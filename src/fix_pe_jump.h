@@ -99,7 +99,9 @@ class FixPEJump : public Fix {
   double hlast, hlast2;         // sizes of the last two steps, 0 if there are none
   int compensate;               // compensate the parasitic jump of step-size changes
   double damp_time;             // damp keyword: parasitic damping time, -1 auto
-  double damp_rate;             // 1/damping time in use (0: none)
+  double damp_rate;             // 1/damping time
+  int damping;                  // 1 if the parasitic mode is damped now
+  int impulse_local;            // another fix changed a velocity in this step (this rank)
   int buffer_layers;            // pe_jump/async: layers of slow atoms moved to the fine clock
 
   // per-atom state, velocity units: free-flight velocity v^{n+1/2},

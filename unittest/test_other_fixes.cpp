@@ -367,3 +367,31 @@ TEST(PEJumpOtherFixes, RigidBodyBesideLobatto2)
   EXPECT_LT(lob2, 2.0 * nve) << "pe_jump lobatto 2 " << lob2 << ", nve " << nve;
   EXPECT_THROW(spread("pe_jump"), LAMMPS_NS::LAMMPSException);
 }
+
+/* ----------------------------------------------------------------------
+   damp auto switches the parasitic damping on once another fix changes
+   velocities (temp/csvr, temp/berendsen, ...), not for fixes that only
+   look (fix ave/time)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, DampingFollowsVelocityChanges)
+{
+  const auto final_x = [](const std::string &other, const std::string &damp) {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds(
+        {"fix 1 all pe_jump damp " + damp, other, "timestep 0.005", "thermo 0", "run 200 post no"});
+    std::vector<double> x;
+    for (int id = 1; id <= s.lmp->atom->natoms; id++) x.push_back(s.x(id, 0));
+    return x;
+  };
+  const auto differ = [](const std::vector<double> &a, const std::vector<double> &b) {
+    double d = 0.0;
+    for (size_t i = 0; i < a.size(); i++) d = std::max(d, std::fabs(a[i] - b[i]));
+    return d;
+  };
+  const std::string look = "fix 2 all ave/time 1 10 10 c_thermo_temp";
+  const std::string rescale = "fix 2 all temp/berendsen 1.0 1.0 0.5";
+  EXPECT_EQ(differ(final_x(look, "auto"), final_x(look, "0")), 0.0);
+  EXPECT_GT(differ(final_x(rescale, "auto"), final_x(rescale, "0")), 1e-8);
+}
