@@ -430,6 +430,7 @@ void FixPEJump::setup(int /*vflag*/)
   stats_valid = 0;
   jump_ref = 0.0;
   evals_step = 0.0;
+  agree_on_started();
   if (!started) {
     start_scheme(nullptr, true);
   } else {
@@ -485,6 +486,18 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   if (compensate && (hlast2 > 0.0)) compensate_step_change();
   check_lists();
   advance(rule->node[rule->primary()] * h_step);
+}
+
+/* ----------------------------------------------------------------------
+   restart data that does not fit the fix clears started only on the ranks
+   that own atoms: every rank must take the same decision
+------------------------------------------------------------------------- */
+
+void FixPEJump::agree_on_started()
+{
+  int all_started = 0;
+  MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
+  started = all_started;
 }
 
 /* ----------------------------------------------------------------------

@@ -140,6 +140,7 @@ class FixPEJump : public Fix {
 
   virtual void start_scheme(const char *, bool);
   void sort_other_fixes();
+  void agree_on_started();
   void check_other_integrators();
   virtual void node_impulses();
   void refresh_start_nodes();

@@ -51,7 +51,7 @@ using namespace FixConst;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
 
-static constexpr int NASYNC_GLOBAL = 3;      // K, fine step index, elapsed time
+static constexpr int NASYNC_GLOBAL = 6;      // K, fine step index, elapsed time, buffer, clock
 static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in reductions
 
 /* ---------------------------------------------------------------------- */
@@ -59,8 +59,8 @@ static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, true), nfine(1), finebit(0), clockbit(0), fine_index(0),
     elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0),
-    velocity_changed(0), split(nullptr), facc(nullptr), fstart_coarse(nullptr), klass(nullptr),
-    tpos(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
+    velocity_changed(0), saved_buffer(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr),
+    klass(nullptr), tpos(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -85,6 +85,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
   counts[0] = counts[1] = counts[2] = 0.0;
+  saved_clock[0] = saved_clock[1] = -1.0;
   stats_slow[0] = stats_slow[1] = 0.0;
   clockbit = finebit;    // with buffer layers: see post_constructor()
   comm_forward = 1;
@@ -451,7 +452,10 @@ void FixPEJumpAsync::advance(double t)
 
 void FixPEJumpAsync::setup(int vflag)
 {
-  if ((buffer_layers > 0) && !started) assign_buffer();
+  agree_on_started();
+  // the buffer is assigned when the scheme starts, or again if the restart
+  // file was written with other buffer layers
+  if ((buffer_layers > 0) && (!started || (buffer_layers != saved_buffer))) assign_buffer();
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
@@ -464,7 +468,9 @@ void FixPEJumpAsync::setup(int vflag)
   // new atoms take theirs at their first evaluation
   fresh_atoms = 0;
   velocity_changed = 0;
+  check_clocks();
   FixPEJump::setup(vflag);
+  saved_buffer = buffer_layers;
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
   label_classes();
@@ -940,6 +946,9 @@ void FixPEJumpAsync::write_restart(FILE *fp)
   list[NGLOBAL] = nfine;
   list[NGLOBAL + 1] = fine_index;
   list[NGLOBAL + 2] = elapsed;
+  list[NGLOBAL + 3] = saved_buffer;
+  list[NGLOBAL + 4] = saved_clock[0];
+  list[NGLOBAL + 5] = saved_clock[1];
   if (comm->me == 0) {
     int size = sizeof(list);
     fwrite(&size, sizeof(int), 1, fp);
@@ -964,6 +973,47 @@ void FixPEJumpAsync::restart(char *buf)
   }
   fine_index = static_cast<int>(list[NGLOBAL + 1]);
   elapsed = tnow = list[NGLOBAL + 2];
+  saved_buffer = static_cast<int>(list[NGLOBAL + 3]);
+  saved_clock[0] = list[NGLOBAL + 4];
+  saved_clock[1] = list[NGLOBAL + 5];
+}
+
+/* ----------------------------------------------------------------------
+   which atoms are on the fine clock (their number and the sum of their
+   IDs): if that changed since the last run (the fast group redefined, a
+   restart with another fast group or buffer), the two-step state of the
+   atoms that changed clock no longer fits. At a coarse node the scheme
+   restarts; inside a coarse step the slow atoms have no node state, so
+   the change is refused.
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::check_clocks()
+{
+  double local[2] = {0.0, 0.0}, clock[2];
+  const int *mask = atom->mask;
+  const tagint *tag = atom->tag;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & groupbit) && (mask[i] & clockbit)) {
+      local[0] += 1.0;
+      local[1] += static_cast<double>(tag[i]);
+    }
+  MPI_Allreduce(local, clock, 2, MPI_DOUBLE, MPI_SUM, world);
+  const bool changed = (clock[0] != saved_clock[0]) || (clock[1] != saved_clock[1]);
+  saved_clock[0] = clock[0];
+  saved_clock[1] = clock[1];
+  if (!started || !changed) return;
+  if (fine_index != 0)
+    error->all(FLERR,
+               "Fix pe_jump/async: the atoms on the fine clock changed inside a coarse step "
+               "({} of {} fine steps done): change the fast group, or the buffer, only at a "
+               "coarse node (after a multiple of K steps)",
+               fine_index, nfine);
+  if (comm->me == 0)
+    utils::logmesg(lmp,
+                   "Fix {}: the atoms on the fine clock changed since the last run: restarting "
+                   "the two-step scheme at this coarse node\n",
+                   style);
+  started = 0;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -76,6 +76,8 @@ class FixPEJumpAsync : public FixPEJump {
   bigint split_calls;                 // neighbor->ncalls when the interactions were split
   bigint topology_at_setup;           // bonds, angles, ... when the run started
   int velocity_changed;               // another fix changed a velocity (this rank)
+  int saved_buffer;                   // buffer layers of the last run (or restart file)
+  double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
 
   PEJump::InteractionSplit *split;
 
@@ -118,6 +120,7 @@ class FixPEJumpAsync : public FixPEJump {
 
   bigint topology_count() const;
   void note_velocity_changes(const AtomList *);
+  void check_clocks();
   void assign_buffer();
   void find_slow();
   void find_moving();

@@ -230,3 +230,56 @@ TEST(PEJumpHostile, RefusedFixLeavesNothingBehind)
         << bad;
   }
 }
+
+/* ----------------------------------------------------------------------
+   the atoms on the fine clock change between runs (the fast group
+   redefined, a restart read with other buffer layers): at a coarse node
+   the scheme restarts with a message, inside a coarse step it is refused
+   (they used to change silently, or the buffer was not assigned at all)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpHostile, FineClockChangesBetweenRuns)
+{
+  const std::vector<std::string> liquid = {"group fast id 1:10", "timestep 0.005", "thermo 0"};
+  {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds(liquid);
+    s.cmds({"fix 1 all pe_jump/async 5 fast", "run 7 post no", "group fast clear",
+            "group fast id 1:10"});
+    EXPECT_NO_THROW(s.cmd("run 1 post no"));    // the same atoms: nothing changed
+    s.cmd("group fast id 11:20");
+    try {
+      s.cmd("run 2 post no");
+      ADD_FAILURE() << "a new fast group inside a coarse step was not refused";
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      EXPECT_THAT(e.what(), ContainsRegex("changed inside a coarse step \\(3 of 5"));
+    }
+  }
+  {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s, 3);
+    s.cmds(liquid);
+    s.cmds({"fix 1 all pe_jump/async 5 fast", "run 10 post no", "group fast id 11:20"});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 5 post no");
+    EXPECT_THAT(::testing::internal::GetCapturedStdout(),
+                ContainsRegex("the atoms on the fine clock changed since the last run"));
+  }
+  // a restart written without buffer, read with buffer 1
+  double slow_without = 0.0, slow_with = 0.0;
+  {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds(liquid);
+    s.cmds({"fix 1 all pe_jump/async 5 fast", "run 10 post no"});
+    slow_without = s.vec("1", 6);
+    s.cmds({"write_restart pe_jump_buffer.restart", "clear", "read_restart pe_jump_buffer.restart",
+            "neighbor 0.3 bin", "fix 1 all pe_jump/async 5 fast buffer 1", "thermo 0",
+            "run 5 post no"});
+    slow_with = s.vec("1", 6);
+    std::remove("pe_jump_buffer.restart");
+  }
+  EXPECT_GT(slow_without, 0.0);
+  EXPECT_LT(slow_with, slow_without);
+}

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <tuple>
 
@@ -141,6 +142,56 @@ TEST(PEJumpRanks, BondedLatticeSameOn1And2And4Ranks)
                core + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3",
                "newton off\n" + core + "fix 1 all pe_jump/async 5 fast"},
               true, 216, box);
+}
+
+// a rank that owns no atom when a restart is read must take the same
+// decisions as the others (restart data that does not fit the fix made only
+// the ranks with atoms start the scheme anew, and the collective calls of
+// the two groups of ranks then hung)
+TEST(PEJumpRanks, RestartWithAnEmptyRank)
+{
+  int me;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  std::vector<double> ke;
+  for (const int nranks : {1, 2}) {
+    MPI_Comm sub;
+    MPI_Comm_split(MPI_COMM_WORLD, me < nranks ? 0 : MPI_UNDEFINED, me, &sub);
+    if (sub == MPI_COMM_NULL) continue;
+    const std::string grid = fmt::format("processors {} 1 1", nranks);
+    const std::string file = fmt::format("pe_jump_empty_rank{}.restart", nranks);
+    Sim s(sub);
+    s.cmds({"units lj",
+            "atom_style atomic",
+            grid,
+            "lattice fcc 0.8442",
+            "region box block 0 8 0 4 0 4",
+            "create_box 1 box",
+            "region half block 0 3.5 INF INF INF INF",
+            "create_atoms 1 region half",
+            "mass 1 1.0",
+            "velocity all create 1.0 4928",
+            "pair_style lj/cut 2.5",
+            "pair_coeff 1 1 1.0 1.0 2.5",
+            "fix 1 all pe_jump",
+            "timestep 0.005",
+            "thermo 0",
+            "run 10 post no",
+            "write_restart " + file,
+            "clear",
+            grid,
+            "read_restart " + file,
+            "fix 1 all pe_jump compensate no",
+            "thermo 0",
+            "run 20 post no"});
+    ke.push_back(s.eval("ke"));
+    MPI_Barrier(sub);
+    if (me == 0) std::remove(file.c_str());
+    MPI_Comm_free(&sub);
+  }
+  if (me == 0) {
+    ASSERT_EQ(ke.size(), 2u);
+    EXPECT_NEAR(ke[1], ke[0], 1e-12 * ke[0]);
+  }
 }
 
 int main(int argc, char **argv)
