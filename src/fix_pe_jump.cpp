@@ -289,7 +289,8 @@ void FixPEJump::init()
   if (!(update->dt > 0.0))
     error->all(FLERR,
                "Fix {} needs a timestep > 0, got {}: to run backwards in time, reverse the "
-               "velocities (velocity all scale -1.0), which the fix continues exactly",
+               "velocities instead (variable rx atom -vx, likewise ry and rz, then velocity all "
+               "set v_rx v_ry v_rz), which the fix continues exactly",
                style, update->dt);
   if (adapt)
     for (const auto &ifix : modify->get_fix_list())
@@ -498,6 +499,21 @@ void FixPEJump::agree_on_started()
   int all_started = 0;
   MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
   started = all_started;
+
+  // velocities that are not finite (a velocity command gone wrong, e.g.
+  // velocity scale to a negative temperature) would only show up later
+  double **v = atom->v;
+  const int *mask = atom->mask;
+  bigint bad = 0, all_bad = 0;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & groupbit) &&
+        !(std::isfinite(v[i][0]) && std::isfinite(v[i][1]) && std::isfinite(v[i][2])))
+      ++bad;
+  MPI_Allreduce(&bad, &all_bad, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (all_bad)
+    error->all(FLERR,
+               "Fix {}: {} atoms have velocities that are not finite at the start of the run",
+               style, all_bad);
 }
 
 /* ----------------------------------------------------------------------

@@ -72,6 +72,7 @@ inline void fpu_chain(Sim &s, double omega, const double q[6], const double p[6]
   // exact positions and velocities through the API (no text round trip)
   for (int i = 0; i < 8; ++i) {
     const int j = s.lmp->atom->map(i + 1);
+    if (j < 0) continue;    // owned by another rank
     s.lmp->atom->x[j][0] = i * FPU_SPACING + ((i == 0 || i == 7) ? 0.0 : q[i - 1]);
     s.lmp->atom->v[j][0] = (i == 0 || i == 7) ? 0.0 : p[i - 1];
   }
@@ -100,6 +101,7 @@ inline void slow_fast_chain(Sim &s, int m, double omega2, const std::vector<doub
   for (int i = 0; i < n; ++i) s.cmd("create_atoms 1 single " + std::to_string(i * 1.5) + " 0 0");
   for (int i = 0; i < n; ++i) {
     const int j = s.lmp->atom->map(i + 1);
+    if (j < 0) continue;    // owned by another rank
     const bool wall = (i == 0) || (i == n - 1);
     s.lmp->atom->x[j][0] = i * 1.5 + (wall ? 0.0 : q[i - 1]);
     s.lmp->atom->v[j][0] = wall ? 0.0 : p[i - 1];
@@ -143,9 +145,11 @@ inline void harmonic_ring(Sim &s, int n, double K, double amplitude, int seed)
     return (state >> 8) / double(1u << 24) - 0.5;
   };
   for (int i = 0; i < n; ++i) {
+    const double dx = 0.1 * amplitude * uniform(), v = amplitude * uniform();
     const int j = s.lmp->atom->map(i + 1);
-    s.lmp->atom->x[j][0] += 0.1 * amplitude * uniform();
-    s.lmp->atom->v[j][0] = amplitude * uniform();
+    if (j < 0) continue;    // owned by another rank
+    s.lmp->atom->x[j][0] += dx;
+    s.lmp->atom->v[j][0] = v;
   }
   s.cmds({"bond_style harmonic", "bond_coeff 1 " + std::to_string(K) + " 1.0"});
   for (int i = 1; i <= n; ++i)
@@ -183,6 +187,7 @@ inline void inhomogeneous_wave(Sim &s, int n)
     const double x = i * dx;
     const double g = (x < 0.5) ? 1.0e-2 * std::exp(-std::pow(20.0 * (x - 0.2), 2)) : 0.0;
     const int j = s.lmp->atom->map(i + 1);
+    if (j < 0) continue;    // owned by another rank
     s.lmp->atom->x[j][0] = i + g;
     s.lmp->atom->v[j][0] = 10.0 * 800.0 * (x - 0.2) * g;
   }
