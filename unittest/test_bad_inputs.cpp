@@ -137,9 +137,16 @@ std::string run_case(const Case &c)
   Sim s(MPI_COMM_WORLD, !want_log);
   std::string error;
   if (want_log) ::testing::internal::CaptureStdout();
+  // the suite runs on 1, 2 and 4 ranks at the same time in one folder:
+  // each run has its own file names
+  int nprocs = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
+  const std::string tag = "pe_jump_bad_np" + std::to_string(nprocs) + ".";
   try {
     set_up(s, c.system);
-    for (const auto &command : c.commands) {
+    for (auto command : c.commands) {
+      for (size_t at; (at = command.find("pe_jump_bad.")) != std::string::npos;)
+        command.replace(at, 12, tag);
       if (command[0] == '!') {
         MPI_Barrier(MPI_COMM_WORLD);
         if (me == 0) pseudo_command(command);
@@ -187,8 +194,14 @@ TEST(PEJumpBadInputs, EveryCaseEndsAsExpected)
     const std::string problem = run_case(c);
     EXPECT_EQ(problem, "") << "bad_inputs.txt line " << c.line << " (" << c.category
                            << "): " << LAMMPS_NS::utils::join_words(c.commands, " ; ");
-    std::remove("pe_jump_bad.restart");
-    std::remove("pe_jump_bad.data");
+    MPI_Barrier(MPI_COMM_WORLD);
+    if (me == 0) {
+      int nprocs = 1;
+      MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
+      const std::string tag = "pe_jump_bad_np" + std::to_string(nprocs) + ".";
+      std::remove((tag + "restart").c_str());
+      std::remove((tag + "data").c_str());
+    }
   }
   if (me == 0) std::printf("%zu bad-input cases\n", cases.size());
 }
