@@ -13,7 +13,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <regex>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace PEJumpTest;
@@ -282,4 +285,46 @@ TEST(PEJumpHostile, FineClockChangesBetweenRuns)
   }
   EXPECT_GT(slow_without, 0.0);
   EXPECT_LT(slow_with, slow_without);
+}
+
+/* ----------------------------------------------------------------------
+   a run that becomes unstable stops with an ERROR before any NaN reaches
+   the output, and what was written before (the log) is intact
+------------------------------------------------------------------------- */
+
+TEST(PEJumpHostile, InstabilityStopsBeforeNaNWithOutputIntact)
+{
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"fix 1 all pe_jump", "0.03"},
+      {"fix 1 all pe_jump quadrature lobatto 3", "0.03"},
+      {"fix 1 all pe_jump/async 4 fast", "0.009"}};
+  const std::regex thermo("^ +[0-9]+ +[-0-9.e+]+ +");
+  const std::regex not_finite("(^|[^A-Za-z])([Nn][Aa][Nn]|[Ii][Nn][Ff])([^A-Za-z]|$)");
+  for (const auto &[fix, dt] : cases) {
+    const std::string log = "pe_jump_unstable.log";
+    std::string error;
+    {
+      Sim s;
+      lj_liquid(s, 3);
+      s.cmds({"region f block 0 1 INF INF INF INF", "group fast region f", "log " + log, fix,
+              "timestep " + dt, "thermo 1", "thermo_modify flush yes"});
+      try {
+        s.cmd("run 2000 post no");
+      } catch (LAMMPS_NS::LAMMPSException &e) {
+        error = e.what();
+      }
+    }
+    EXPECT_THAT(error, ContainsRegex("is unstable at step [0-9]+|atoms move more than half"))
+        << fix;
+    std::ifstream in(log);
+    std::string line;
+    int lines = 0;
+    while (std::getline(in, line))
+      if (std::regex_search(line, thermo)) {
+        ++lines;
+        EXPECT_FALSE(std::regex_search(line, not_finite)) << fix << ": " << line;
+      }
+    EXPECT_GT(lines, 1) << fix;    // the thermo lines written before the stop
+    std::remove(log.c_str());
+  }
 }
