@@ -618,6 +618,20 @@ bool FixPEJump::rebuild_due() const
 
 /* ---------------------------------------------------------------------- */
 
+const int *FixPEJump::atom_mask() const
+{
+  return atom->mask;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJump::owned_atoms() const
+{
+  return atom->nlocal;
+}
+
+/* ---------------------------------------------------------------------- */
+
 double FixPEJump::inverse_mass_of(int i) const
 {
   return atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]];
@@ -811,14 +825,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
     vv = MAX(vv, vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
     jj = MAX(jj, jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
   };
-  if (only) {
-    for (const int i : *only) one(i);
-  } else {
-    const int *mask = atom->mask;
-    const int nlocal = atom->nlocal;
-    for (int i = 0; i < nlocal; i++)
-      if (mask[i] & groupbit) one(i);
-  }
+  for_atoms(only, one);
   mag[0] = vv;
   mag[1] = jj;
 }
@@ -1066,11 +1073,7 @@ void FixPEJump::quadrature_sum()
       if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
     }
   };
-  if (node_select)
-    for (const int i : *node_select) start_sum(i);
-  else
-    for (int i = 0; i < nlocal; i++)
-      if (mask[i] & groupbit) start_sum(i);
+  for_atoms(node_select, start_sum);
 
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
@@ -1166,13 +1169,7 @@ void FixPEJump::evaluate_at(double shift, const AtomList *only)
     x[i][1] = xsave[i][1] + shift * vhalf[i][1];
     x[i][2] = xsave[i][2] + shift * vhalf[i][2];
   };
-  if (only) {
-    for (const int i : *only) move(i);
-  } else {
-    const int *mask = atom->mask;
-    for (int i = 0; i < atom->nlocal; i++)
-      if (mask[i] & groupbit) move(i);
-  }
+  for_atoms(only, move);
   sampler->compute(sample_mask, 0, 0);
   evals_step += node_cost();
 }
@@ -1208,11 +1205,7 @@ void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, c
       if (at_end)
         for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
     };
-    if (only)
-      for (const int i : *only) add(i);
-    else
-      for (int i = 0; i < nlocal; i++)
-        if (mask[i] & groupbit) add(i);
+    for_atoms(only, add);
   }
 
   restore_positions(only);
@@ -1343,13 +1336,7 @@ double FixPEJump::node_excursion(double **xhold, double lo, double hi, const Ato
     }
     worst = MAX(worst, MAX(dlo, dhi));
   };
-  if (only) {
-    for (const int i : *only) excursion(i);
-  } else {
-    const int *mask = atom->mask;
-    for (int i = 0; i < atom->nlocal; i++)
-      if (mask[i] & groupbit) excursion(i);
-  }
+  for_atoms(only, excursion);
   return worst;
 }
 

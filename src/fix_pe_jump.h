@@ -172,6 +172,21 @@ class FixPEJump : public Fix {
   double potential_now(int mask);
   void global_state(double *) const;
 
+  // apply one(i) to the owned atoms of the group, or to those listed in only
+  template <typename Function> void for_atoms(const AtomList *only, Function &&one) const
+  {
+    if (only) {
+      for (const int i : *only) one(i);
+      return;
+    }
+    const int *mask = atom_mask();
+    const int nlocal = owned_atoms();
+    for (int i = 0; i < nlocal; i++)
+      if (mask[i] & groupbit) one(i);
+  }
+  const int *atom_mask() const;    // atom->mask, atom->nlocal (the header
+  int owned_atoms() const;         // needs no definition of class Atom)
+
   // two-step update of owned atom i with the quadrature sum favg of the
   // forces over a step of size h: [v]^{n+1} = 2 h favg / m - [v]^n,
   // v^{n+3/2} = v^{n+1/2} + [v]^{n+1}, node velocity v^{n+1}

@@ -301,13 +301,7 @@ void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
     for (int k = 0; k < 3; k++)
       if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) velocity_changed = 1;
   };
-  if (only) {
-    for (const int i : *only) check(i);
-  } else {
-    const int *mask = atom->mask;
-    for (int i = 0; i < atom->nlocal; i++)
-      if (mask[i] & groupbit) check(i);
-  }
+  for_atoms(only, check);
 }
 
 /* ----------------------------------------------------------------------

@@ -4,6 +4,7 @@
 #define PE_JUMP_SYSTEMS_H
 
 #include "atom.h"
+#include "exceptions.h"
 #include "fix.h"
 #include "input.h"
 #include "lammps.h"
@@ -11,6 +12,7 @@
 #include "update.h"
 #include "variable.h"
 
+#include <algorithm>
 #include <cmath>
 #include <mpi.h>
 #include <string>
@@ -53,6 +55,41 @@ class Sim {
 
   LAMMPS *lmp;
 };
+
+// the first error of a sequence of commands in a fresh instance, or
+// "no error"
+inline std::string error_of(const std::vector<std::string> &commands)
+{
+  Sim s;
+  try {
+    s.cmds(commands);
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    return e.what();
+  }
+  return "no error";
+}
+inline std::string error_of(std::vector<std::string> setup, const std::string &failing)
+{
+  setup.push_back(failing);
+  return error_of(setup);
+}
+
+// positions of all atoms, by atom ID (serial runs)
+inline std::vector<double> positions(Sim &s)
+{
+  std::vector<double> x;
+  for (int id = 1; id <= s.lmp->atom->natoms; id++)
+    for (int k = 0; k < 3; k++) x.push_back(s.x(id, k));
+  return x;
+}
+
+// largest difference of two equally long lists of values
+inline double max_diff(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double d = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, std::fabs(a[i] - b[i]));
+  return d;
+}
 
 // the paper's Fermi-Pasta-Ulam chain (m = 3): 6 moving particles of mass 1
 // between two fixed walls, soft quartic springs (q_{2i+1}-q_{2i})^4 and stiff

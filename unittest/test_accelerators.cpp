@@ -20,14 +20,6 @@ namespace {
 // the run; positions of all atoms by atom ID
 using Builder = std::function<void(Sim &)>;
 
-std::vector<double> positions(Sim &s)
-{
-  std::vector<double> x;
-  for (int id = 1; id <= s.lmp->atom->natoms; id++)
-    for (int k = 0; k < 3; k++) x.push_back(s.x(id, k));
-  return x;
-}
-
 std::vector<double> accelerated_run(const std::string &accelerator, const Builder &system,
                                     const std::string &fix, const std::string &run)
 {
@@ -67,13 +59,6 @@ void fpu(Sim &s)
   fpu_gni_values(50.0, q, p);
   fpu_chain(s, 50.0, q, p);
   s.cmds({"group fast id 2:4", "timestep 0.001"});
-}
-
-double max_diff(const std::vector<double> &a, const std::vector<double> &b)
-{
-  double d = 0.0;
-  for (size_t i = 0; i < a.size(); i++) d = std::max(d, std::fabs(a[i] - b[i]));
-  return d;
 }
 
 }    // namespace

@@ -73,18 +73,6 @@ double single_steps(Sim &s, int n, const std::function<double()> &next_dt,
   return worst / std::fabs(h0);
 }
 
-std::string error_of(const std::vector<std::string> &setup, const std::string &failing)
-{
-  Sim s;
-  s.cmds(setup);
-  try {
-    s.cmd(failing);
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    return e.what();
-  }
-  return "no error";
-}
-
 // independent implementation of the scheme for the FPU chain (plain C++):
 // midpoint or 3-point Lobatto quadrature of the exact forces, init kick
 struct FpuReference {

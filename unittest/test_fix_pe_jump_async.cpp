@@ -44,13 +44,6 @@ std::vector<double> chain_q(Sim &s)
   return q;
 }
 
-double max_diff(const std::vector<double> &a, const std::vector<double> &b)
-{
-  double d = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, std::fabs(a[i] - b[i]));
-  return d;
-}
-
 // chain at time T with fix pe_jump/async (K >= 1) or fix pe_jump (K = 0)
 std::vector<double> chain_at(double T, double hf, int K, const std::string &rule)
 {
@@ -70,18 +63,6 @@ std::vector<double> chain_q_at_start()
   Sim s;
   chain(s);
   return chain_q(s);
-}
-
-std::string error_of(const std::vector<std::string> &setup, const std::string &failing)
-{
-  Sim s;
-  try {
-    s.cmds(setup);
-    s.cmd(failing);
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    return e.what();
-  }
-  return "no error";
 }
 
 }    // namespace

@@ -24,32 +24,6 @@ using ::testing::ContainsRegex;
 
 namespace {
 
-std::string error_of(const std::vector<std::string> &commands)
-{
-  Sim s;
-  try {
-    s.cmds(commands);
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    return e.what();
-  }
-  return "no error";
-}
-
-std::vector<double> positions(Sim &s)
-{
-  std::vector<double> x;
-  for (int id = 1; id <= s.lmp->atom->natoms; id++)
-    for (int k = 0; k < 3; k++) x.push_back(s.x(id, k));
-  return x;
-}
-
-double max_diff(const std::vector<double> &a, const std::vector<double> &b)
-{
-  double d = 0.0;
-  for (size_t i = 0; i < a.size(); i++) d = std::max(d, std::fabs(a[i] - b[i]));
-  return d;
-}
-
 std::vector<double> lj_run(const std::string &fix, int steps = 50)
 {
   Sim s;
