@@ -72,3 +72,23 @@ TEST(PEJumpPlugin, SameTrajectoryAsBuiltInStyles)
     EXPECT_GT(std::fabs(builtin[0] - 1.6), 1e-3);
   }
 }
+
+// a plugin built for another LAMMPS version refuses to load, naming both
+// versions, and registers nothing
+TEST(PEJumpPlugin, RefusesAnotherLammpsVersion)
+{
+  Sim s;
+  auto *fix_map = s.lmp->modify->fix_map;
+  fix_map->erase("pe_jump");
+  fix_map->erase("pe_jump/async");
+  try {
+    s.cmd(std::string("plugin load ") + PEJUMP_OTHER_PLUGIN_PATH);
+    FAIL() << "a plugin for another LAMMPS version was loaded";
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    EXPECT_THAT(e.what(),
+                HasSubstr("built for LAMMPS version 4 Jul 2026 (20260704) but this "
+                          "LAMMPS is version " +
+                          std::to_string(s.lmp->num_ver)));
+  }
+  EXPECT_EQ(fix_map->count("pe_jump"), 0u);
+}

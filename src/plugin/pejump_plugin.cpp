@@ -13,8 +13,14 @@
 
 // plugin entry point: registers the PE-JUMP fix styles with a running LAMMPS
 
+#include "exceptions.h"
 #include "lammpsplugin.h"
+#include "library.h"
 #include "version.h"
+
+#include <cstdio>
+#include <cstring>
+#include <string>
 
 #include "fix_pe_jump.h"
 #include "fix_pe_jump_async.h"
@@ -31,8 +37,48 @@ static Fix *pe_jump_async_creator(LAMMPS *lmp, int argc, char **argv)
   return new FixPEJumpAsync(lmp, argc, argv);
 }
 
+// the LAMMPS version the plugin was compiled against (a test builds a
+// plugin that claims another one)
+#ifndef PEJUMP_PLUGIN_BUILT_FOR
+#define PEJUMP_PLUGIN_BUILT_FOR LAMMPS_VERSION
+#endif
+
+// "4 Feb 2025" -> 20250204 (0 if not a date), as LAMMPS numbers versions
+static int version_number(const char *date)
+{
+  static const char *months[] = {"Jan", "Feb", "Mar", "Apr", "May", "Jun",
+                                 "Jul", "Aug", "Sep", "Oct", "Nov", "Dec"};
+  int day = 0, year = 0;
+  char month[4] = {0};
+  if (sscanf(date, "%d %3s %d", &day, month, &year) != 3) return 0;
+  for (int m = 0; m < 12; m++)
+    if (strcmp(month, months[m]) == 0) return 10000 * year + 100 * (m + 1) + day;
+  return 0;
+}
+
 extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
 {
+  // the styles are compiled against the class layout of one LAMMPS version:
+  // in another one they could run on corrupted memory. The running
+  // version comes through the C library interface, which does not depend
+  // on that layout
+  const int built_for = version_number(PEJUMP_PLUGIN_BUILT_FOR);
+  const int running = lammps_version(lmp);
+  if (built_for != running) {
+    const std::string message = std::string("The PE-JUMP plugin was built for LAMMPS version ") +
+        PEJUMP_PLUGIN_BUILT_FOR + " (" + std::to_string(built_for) +
+        ") but this LAMMPS is version " + std::to_string(running) +
+        ": build the plugin against this LAMMPS (cmake -D LAMMPS_SOURCE_DIR=...), or use the lmp "
+        "built with it";
+    // printed here (lammps_error() would end the process of a library
+    // caller), then the plugin load stops with the error
+    if (lammps_extract_setting(lmp, "world_rank") == 0) {
+      fprintf(stderr, "ERROR: %s\n", message.c_str());
+      fflush(stderr);
+    }
+    throw LAMMPS_NS::LAMMPSException("ERROR: " + message + "\n");
+  }
+
   lammpsplugin_t plugin;
   auto register_plugin = (lammpsplugin_regfunc) regfunc;
 
