@@ -15,6 +15,7 @@ cache=${1:?usage: fetch-lammps.sh CACHE_DIR}
 suite=trixie
 pkg=lammps
 version=20250204+dfsg.1
+lammps_name="4 Feb 2025"
 orig="${pkg}_${version}.orig.tar.xz"
 tree="$cache/lammps-${version}"
 
@@ -53,22 +54,31 @@ sources=$(ls "$state"/lists/*_source_Sources* 2>/dev/null | head -n 1)
 [ -n "$sources" ] || { echo "fetch-lammps: no Sources index for $suite" >&2; exit 1; }
 # the index may be stored compressed; apt-helper reads every format apt writes
 /usr/lib/apt/apt-helper cat-file "$sources" > "$state/Sources"
-read -r debver expected < <(awk -v p="$pkg" -v v="$version" -v f="$orig" '
+# version, SHA-256 and pool folder of the tarball (Directory: follows the
+# checksums within the package's stanza)
+read -r debver expected directory < <(awk -v p="$pkg" -v v="$version" -v f="$orig" '
+  /^$/ { if (sha != "") exit; cur = "" }
   /^Package:/ { cur = $2 } /^Version:/ { ver = $2 }
   /^Checksums-Sha256:/ { in_sha = 1; next } /^[^ ]/ { in_sha = 0 }
-  in_sha && cur == p && index(ver, v) == 1 && $3 == f { print ver, $1; exit }' "$state/Sources")
-[ -n "${expected:-}" ] || { echo "fetch-lammps: $orig not listed in the Sources index" >&2; exit 1; }
+  in_sha && cur == p && index(ver, v) == 1 && $3 == f { sha = $1; found = ver }
+  /^Directory:/ && sha != "" && dir == "" { dir = $2 }
+  END { if (sha != "" && dir != "") print found, sha, dir }' "$state/Sources")
+[ -n "${directory:-}" ] || { echo "fetch-lammps: $orig not listed in the Sources index" >&2; exit 1; }
 
-# the .dsc can be missing on the mirror: apt then fails although the tarball
-# arrived, so judge by the verified tarball, not by apt's exit code
-(cd "$state" && apt-get "${apt_opts[@]}" -qq source --download-only "$pkg=$debver" >&2) || true
-[ -f "$state/$orig" ] || { echo "fetch-lammps: download of $orig failed" >&2; exit 1; }
+# only the tarball is fetched, by apt's own downloader, which also checks
+# the SHA-256; its progress lines stay in a log
+if ! /usr/lib/apt/apt-helper "${apt_opts[@]}" download-file "$uri/$directory/$orig" \
+  "$state/$orig" "SHA256:$expected" > "$state/download.log" 2>&1; then
+  echo "fetch-lammps: download of $orig failed:" >&2
+  grep -E "^(E|W):" "$state/download.log" | sed 's/http[^ ]*//g' >&2
+  exit 1
+fi
 actual=$(sha256sum "$state/$orig" | cut -d' ' -f1)
 if [ "$actual" != "$expected" ]; then
   echo "fetch-lammps: SHA-256 mismatch for $orig ($actual, expected $expected)" >&2
   exit 1
 fi
-echo "fetch-lammps: $orig verified (sha256 $actual)" >&2
+echo "fetch-lammps: LAMMPS ${lammps_name} (Debian source package $pkg $debver), SHA-256 verified" >&2
 
 unpack=$(mktemp -d "$cache/unpack.XXXXXX")
 tar -xJf "$state/$orig" -C "$unpack"
