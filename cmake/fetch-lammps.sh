@@ -1,22 +1,29 @@
 #!/usr/bin/env bash
 # Fetch the LAMMPS source tree this package builds against by default:
 # the 4 Feb 2025 release as shipped by Debian 13 "trixie" (source package
-# lammps, version 20250204+dfsg.1). Only the upstream .orig.tar.xz is used.
+# lammps, version 20250204+dfsg.1), or the newest one of Debian unstable.
+# Only the upstream .orig tarball is used.
 #
 # The deb-src entry is derived at run time from the machine's own Debian
 # sources (no host name is written here), apt runs with a private state
 # directory so the system's apt configuration is untouched, and the tarball
 # is accepted only if its SHA-256 matches the Sources index.
 #
-# usage: fetch-lammps.sh CACHE_DIR      (prints the unpacked tree's path)
+# usage: fetch-lammps.sh CACHE_DIR [stable|newest]   (prints the unpacked tree's path)
+#   stable: LAMMPS 4 Feb 2025 (Debian 13), newest: LAMMPS 4 Jul 2026 (Debian unstable)
 set -euo pipefail
 
-cache=${1:?usage: fetch-lammps.sh CACHE_DIR}
-suite=trixie
+cache=${1:?usage: fetch-lammps.sh CACHE_DIR [stable|newest]}
+release=${2:-stable}
 pkg=lammps
-version=20250204+dfsg.1
-lammps_name="4 Feb 2025"
-orig="${pkg}_${version}.orig.tar.xz"
+case "$release" in
+  stable) # Debian 13 "trixie", the default
+    suite=trixie version=20250204+dfsg.1 lammps_name="4 Feb 2025" ext=tar.xz ;;
+  newest) # Debian unstable
+    suite=sid version=20260704+dfsg lammps_name="4 Jul 2026" ext=tar.gz ;;
+  *) echo "fetch-lammps: unknown release $release (stable or newest)" >&2; exit 1 ;;
+esac
+orig="${pkg}_${version}.orig.${ext}"
 tree="$cache/lammps-${version}"
 
 if [ -f "$tree/src/lammps.h" ]; then
@@ -62,7 +69,7 @@ read -r debver expected directory < <(awk -v p="$pkg" -v v="$version" -v f="$ori
   /^Checksums-Sha256:/ { in_sha = 1; next } /^[^ ]/ { in_sha = 0 }
   in_sha && cur == p && index(ver, v) == 1 && $3 == f { sha = $1; found = ver }
   /^Directory:/ && sha != "" && dir == "" { dir = $2 }
-  END { if (sha != "" && dir != "") print found, sha, dir }' "$state/Sources")
+  END { if (sha != "" && dir != "") print found, sha, dir }' "$state/Sources") || true
 [ -n "${directory:-}" ] || { echo "fetch-lammps: $orig not listed in the Sources index" >&2; exit 1; }
 
 # only the tarball is fetched, by apt's own downloader, which also checks
@@ -81,9 +88,11 @@ fi
 echo "fetch-lammps: LAMMPS ${lammps_name} (Debian source package $pkg $debver), SHA-256 verified" >&2
 
 unpack=$(mktemp -d "$cache/unpack.XXXXXX")
-tar -xJf "$state/$orig" -C "$unpack"
-top=$(find "$unpack" -mindepth 1 -maxdepth 1 -type d | head -n 1)
-[ -f "$top/src/lammps.h" ] || { echo "fetch-lammps: unexpected tarball layout" >&2; exit 1; }
+tar -xf "$state/$orig" -C "$unpack"
+# the tarball holds the tree itself or one folder with it
+top=$unpack
+[ -f "$top/src/lammps.h" ] || top=$(find "$unpack" -mindepth 1 -maxdepth 1 -type d | head -n 1)
+[ -f "$top/src/lammps.h" ] || { rm -rf "$unpack"; echo "fetch-lammps: unexpected tarball layout" >&2; exit 1; }
 mv "$top" "$tree"
 rm -rf "$unpack"
 echo "$tree"
