@@ -1097,6 +1097,9 @@ def main():
         head.append(f"Binary: a copy of `build/lmp` and its `liblammps.so.0` built {b.get('mtime')} (git HEAD "
                     f"{meta.get('git_head', '?')}{'; src/ had uncommitted changes' if meta.get('git_src_dirty') else ''}), "
                     "taken at the start so that a rebuild during the run cannot mix binaries.\n")
+    head.append("LAMMPS' timer categories: from 2026-11-24 on, the extra force evaluations of the fixes "
+                "are stamped as Pair, Bond, Kspace and Comm time, as the Verlet loop's own; in a run made "
+                "with an earlier binary the Modify time includes them.\n")
     stages = meta.get("stages", {})
     bins = {v.get("binary_mtime") for v in stages.values() if v.get("binary_mtime")}
     if len(bins) > 1:
