@@ -108,7 +108,7 @@ TEST(PEJumpPlugin, RefusesAnotherLammpsVersion)
     FAIL() << "a plugin for another LAMMPS version was loaded";
   } catch (LAMMPS_NS::LAMMPSException &e) {
     EXPECT_THAT(e.what(),
-                HasSubstr("built for LAMMPS version 4 Jul 2026 (20260704) but this "
+                HasSubstr("built for LAMMPS version 1 Jan 2000 (20000101) but this "
                           "LAMMPS is version " +
                           std::to_string(s.lmp->num_ver)));
   }
