@@ -32,26 +32,31 @@
 #include "neighbor.h"
 #include "output.h"
 #include "pair.h"
+#include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
+#include "pe_jump_node_sampler.h"
+#include "pe_jump_other_fixes.h"
 #include "pe_jump_quadrature.h"
+#include "pe_jump_stability_guard.h"
+#include "pe_jump_step_control.h"
 #include "update.h"
 
 #include <cmath>
 #include <cstring>
-#include <utility>
+#include <memory>
 
 using namespace LAMMPS_NS;
 using namespace FixConst;
+using PEJump::AtomSet;
+using PEJump::AtomState;
 using PEJump::ForceSampler;
+using PEJump::NestedLobatto;
+using PEJump::NodeSampler;
+using PEJump::OtherFixes;
 using PEJump::Quadrature;
+using PEJump::StabilityGuard;
+using PEJump::StepControl;
 
-static constexpr double ADAPT_GROWTH = 1.05;         // largest step growth factor per step
-static constexpr double ADAPT_SAFETY = 0.5;          // aim at this fraction of the bound
-static constexpr double BLOWUP = 1.0e300;            // stands for a non-finite value in reductions
-static constexpr double STOP_GROWTH = 1.0e6;         // jump growth that is always instability
-static constexpr double HINT_GROWTH = 2.0;           // ... that is instability if atoms move far
-static constexpr int ADAPT_SAMPLES = 64;             // trial steps between dtmax and dtmin
-static constexpr int ADAPT_BISECT = 40;              // bisections of the largest admissible step
 static constexpr double AUTO_DAMP_STEPS = 1000.0;    // damp auto: parasitic damping time in steps
 
 /* ---------------------------------------------------------------------- */
@@ -61,9 +66,9 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 /* ---------------------------------------------------------------------- */
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool two_clocks) :
-    Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), fnode(nullptr), node_select(nullptr),
-    fhist1(nullptr), fhist2(nullptr), hlast(0.0), hlast2(0.0), vhalf(nullptr), jump(nullptr),
-    fstart(nullptr), fsum(nullptr), fsample(nullptr), xsave(nullptr), fsave(nullptr)
+    Fix(lmp, narg, arg), rule(nullptr), nested(nullptr), sampler(nullptr), nodes(nullptr),
+    state(nullptr), steps(nullptr), guard(nullptr), others(nullptr), fsum(nullptr),
+    fsample(nullptr), fnode(nullptr), nmax_work(0), node_select(nullptr)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
@@ -71,15 +76,13 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   int npoints = 1;
   init_style = INIT_KICK;
   sample_mask = ForceSampler::ALL;
-  adapt = 0;
-  adapt_eps = adapt_dtmin = adapt_dtmax = 0.0;
-  compensate = two_clocks ? 0 : 1;
+  double adapt_eps = 0.0, adapt_dtmin = 0.0, adapt_dtmax = 0.0;
+  int compensate = -1;    // default: with adapt
   damp_time = -1.0;
   buffer_layers = 0;
   auto_tol = 0.0;
   auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
   id_pe = nullptr;
-  c_pe = nullptr;
   vprev = 0.0;
 
   const std::string fix = std::string("fix ") + style;
@@ -123,7 +126,6 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
       iarg += 2;
     } else if (strcmp(arg[iarg], "adapt") == 0) {
       if (iarg + 4 > narg) utils::missing_cmd_args(FLERR, fix + " adapt", error);
-      adapt = 1;
       adapt_eps = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
       adapt_dtmin = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
       adapt_dtmax = utils::numeric(FLERR, arg[iarg + 3], false, lmp);
@@ -174,12 +176,24 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 
   rule = new Quadrature(family, npoints);
   sampler = new ForceSampler(lmp);
+  nodes = new NodeSampler(lmp, sampler);
+  guard = new StabilityGuard(lmp);
+  others = new OtherFixes(lmp, this);
 
   if (auto_tol > 0.0) {
     if (sample_mask != ForceSampler::ALL)
       error->all(FLERR, "Fix {} quadrature auto samples all force contributions", style);
     id_pe = utils::strdup(std::string(id) + "_pe");
+    nested = new NestedLobatto();
   }
+
+  // the per-atom state; step control adds the force history it needs
+  state = new AtomState(lmp);
+  VHALF = state->add("vhalf", 3, 0.0);
+  JUMP = state->add("jump", 3, 0.0);
+  FSTART = rule->has_end_nodes() ? state->add("fstart", 3, std::nan("")) : -1;
+  if (compensate < 0) compensate = (adapt_eps > 0.0) ? 1 : 0;
+  steps = new StepControl(lmp, *state, adapt_eps, adapt_dtmin, adapt_dtmax, compensate != 0);
 
   time_integrate = 1;
   scalar_flag = 1;
@@ -196,22 +210,15 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   force_reneighbor = 1;
   next_reneighbor = -1;
 
-  nstate = (rule->has_end_nodes() ? 9 : 6) + ((adapt || compensate) ? 6 : 0);
-  nmax_work = 0;
   started = reinit_pending = 0;
   split_primary = use_copy = 0;
   eflag_step = vflag_step = 0;
   h_step = 0.0;
-  stats_valid = 0;
-  stats[0] = stats[1] = 0.0;
-  jump_ref = 0.0;
   evals_step = evals_total = 0.0;
-  energy_scale = 0.0;
   cached_step = -1;
 
-  FixPEJump::grow_arrays(atom->nmax);
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
-  fresh_atoms = others_bits = velocity_hooks = damping = impulse_local = 0;
+  fresh_atoms = damping = impulse_local = 0;
   damp_rate = 0.0;
   advance_pending = 0.0;
   // a derived style registers its callbacks at the end of its own
@@ -241,21 +248,20 @@ FixPEJump::~FixPEJump()
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
-  memory->destroy(vhalf);
-  memory->destroy(jump);
-  memory->destroy(fstart);
-  memory->destroy(fhist1);
-  memory->destroy(fhist2);
   memory->destroy(fsum);
   memory->destroy(fsample);
-  memory->destroy(xsave);
-  memory->destroy(fsave);
   memory->destroy(fnode);
   if (id_pe && modify->get_compute_by_id(id_pe)) modify->delete_compute(id_pe);
   delete[] id_pe;
   delete[] extlist;
-  delete rule;
+  delete steps;
+  delete state;
+  delete others;
+  delete guard;
+  delete nodes;
   delete sampler;
+  delete nested;
+  delete rule;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -263,7 +269,7 @@ FixPEJump::~FixPEJump()
 int FixPEJump::setmask()
 {
   int mask = INITIAL_INTEGRATE | POST_NEIGHBOR | PRE_REVERSE | FINAL_INTEGRATE;
-  if (adapt) mask |= END_OF_STEP;
+  if (steps->adapts()) mask |= END_OF_STEP;
   return mask;
 }
 
@@ -271,17 +277,6 @@ int FixPEJump::setmask()
 
 void FixPEJump::init()
 {
-  // how often fixes look at the atoms at the end of a step
-  end_of_step_every.clear();
-  for (const auto &ifix : modify->get_fix_list())
-    if ((ifix != this) && (ifix->setmask() & END_OF_STEP))
-      end_of_step_every.push_back(MAX(ifix->nevery, 1));
-
-  inverse_mass.assign(atom->ntypes + 1, 0.0);
-  if (atom->mass)
-    for (int t = 1; t <= atom->ntypes; t++)
-      if (atom->mass[t] > 0.0) inverse_mass[t] = 1.0 / atom->mass[t];
-
   if (utils::strmatch(update->integrate_style, "^respa"))
     error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
   // the jump relation needs a step that goes forward: with h = 0 it flips
@@ -292,7 +287,7 @@ void FixPEJump::init()
                "velocities instead (variable rx atom -vx, likewise ry and rz, then velocity all "
                "set v_rx v_ry v_rz), which the fix continues exactly",
                style, update->dt);
-  if (adapt)
+  if (steps->adapts())
     for (const auto &ifix : modify->get_fix_list())
       if (utils::strmatch(ifix->style, "^dt/reset"))
         error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them",
@@ -301,7 +296,8 @@ void FixPEJump::init()
     error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
                atom->atom_style);
 
-  sort_other_fixes();
+  others->sort(*sampler);
+  maxexchange = state->values();
 
   // forces that the rule does not integrate (other fixes that add forces,
   // contributions left out by sample) act as impulses at the primary node:
@@ -310,10 +306,10 @@ void FixPEJump::init()
   // Gauss-Legendre rule then gets the centre as an extra node
 
   const int present = sampler->present();
-  split_primary = !adders.empty() || ((sample_mask & present) != present);
+  split_primary = others->add_forces() || ((sample_mask & present) != present);
   use_copy = split_primary && ((sample_mask & present) == present);
   const bool centre = split_primary && (rule->family() == Quadrature::LEGENDRE) &&
-      (rule->points() % 2 == 0) && (auto_tol == 0.0);
+      (rule->points() % 2 == 0) && !nested;
   if (centre != (rule->size() != rule->points())) {
     auto *other = new Quadrature(rule->family(), rule->points(), centre);
     delete rule;
@@ -328,96 +324,22 @@ void FixPEJump::init()
     damp_rate = 1.0 / damp_time;
   else if (damp_time < 0.0)
     damp_rate = 1.0 / (AUTO_DAMP_STEPS * update->dt);
-  damping = (damp_time > 0.0) || ((damp_time < 0.0) && !adders.empty());
+  damping = (damp_time > 0.0) || ((damp_time < 0.0) && others->add_forces());
   impulse_local = 0;
-  if (id_pe) {
-    c_pe = modify->get_compute_by_id(id_pe);
-    if (!c_pe) error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
-  }
+  if (id_pe && !modify->get_compute_by_id(id_pe))
+    error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
   if (present && !(sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
 
 /* ----------------------------------------------------------------------
-   other fixes that act on the forces: those that replace or project them
-   act at every quadrature node (projections), those that add forces act
-   once per step as impulses (adders). Constraints are refused, other time
-   integrators are remembered for the interaction check
+   atoms of another time integrator interact with this fix's atoms only if
+   every node of the rule is a step end (lobatto 2)
 ------------------------------------------------------------------------- */
 
-void FixPEJump::sort_other_fixes()
+static bool nodes_at_step_ends(const Quadrature &rule)
 {
-  std::vector<Fix *> preparations, projections;
-  adders.clear();
-  others_bits = 0;
-  velocity_hooks = 0;
-  for (auto *ifix : modify->get_fix_list()) {
-    if (ifix == this) continue;
-    velocity_hooks |= ifix->setmask() & (BETWEEN_STEPS | INSIDE_STEP);
-    if (ifix->setmask() & PRE_FORCE) preparations.push_back(ifix);
-    if (ifix->time_integrate) {
-      others_bits |= ifix->groupbit;
-      continue;
-    }
-    if (ifix->dof_flag)
-      error->all(FLERR,
-                 "Fix {} cannot be combined with the constraints of fix {} ({}): they assume the "
-                 "velocity Verlet update of fix nve. Use fix nve, or remove the constraints",
-                 style, ifix->id, ifix->style);
-    if (!(ifix->setmask() & POST_FORCE)) continue;
-    if (utils::strmatch(ifix->style, "^setforce") || utils::strmatch(ifix->style, "^aveforce") ||
-        utils::strmatch(ifix->style, "^freeze") || utils::strmatch(ifix->style, "^lineforce") ||
-        utils::strmatch(ifix->style, "^planeforce") || utils::strmatch(ifix->style, "^enforce2d"))
-      projections.push_back(ifix);
-    else
-      adders.push_back(ifix);
-  }
-  sampler->set_hooks(preparations, projections);
-}
-
-/* ----------------------------------------------------------------------
-   atoms of another time integrator (fix nve, fix rigid, a second fix
-   pe_jump) sit at the end of the step when forces are computed. Forces
-   between them and this fix's atoms are consistent only if every node of
-   the rule is a step end (lobatto 2); otherwise refuse interactions
-   between the two sets. Checked at setup and after each list build.
-------------------------------------------------------------------------- */
-
-void FixPEJump::check_other_integrators()
-{
-  if (!others_bits || ((rule->family() == Quadrature::LOBATTO) && (rule->size() == 2))) return;
-
-  const int *mask = atom->mask;
-  const auto cross = [&](int i, int j) {
-    return ((mask[i] & groupbit) && (mask[j] & others_bits)) ||
-        ((mask[i] & others_bits) && (mask[j] & groupbit));
-  };
-  int local = 0;
-  for (int n = 0; (n < neighbor->nlist) && !local; n++) {
-    const NeighList *list = neighbor->lists[n];
-    // lists of pair styles, built at every reneighboring (others may be stale)
-    if (!list || !list->numneigh || list->kokkos || list->occasional ||
-        (list->requestor_type != NeighList::PAIR))
-      continue;
-    for (int ii = 0; (ii < list->inum) && !local; ii++) {
-      const int i = list->ilist[ii];
-      for (int jj = 0; jj < list->numneigh[i]; jj++)
-        if (cross(i, list->firstneigh[i][jj] & NEIGHMASK)) local = 1;
-    }
-  }
-  if (atom->molecular != Atom::ATOMIC)
-    for (int n = 0; (n < neighbor->nbondlist) && !local; n++)
-      if (cross(neighbor->bondlist[n][0], neighbor->bondlist[n][1])) local = 1;
-  int global = 0;
-  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
-  if (global)
-    error->all(FLERR,
-               "Fix {} with quadrature {} evaluates forces inside the step, but atoms of another "
-               "time integrator interact with its atoms at step {}: their positions are those "
-               "of the step end, so the forces between the two sets would mix times. Use "
-               "quadrature lobatto 2 (forces at the step ends only), or integrate all "
-               "interacting atoms with one fix {}",
-               style, rule->name(), update->ntimestep, style);
+  return (rule.family() == Quadrature::LOBATTO) && (rule.size() == 2);
 }
 
 /* ----------------------------------------------------------------------
@@ -427,9 +349,9 @@ void FixPEJump::check_other_integrators()
 
 void FixPEJump::setup(int /*vflag*/)
 {
+  state->ensure(atom->nlocal);
   grow_work();
-  stats_valid = 0;
-  jump_ref = 0.0;
+  guard->start_run();
   evals_step = 0.0;
   agree_on_started();
   if (!started) {
@@ -447,21 +369,11 @@ void FixPEJump::setup(int /*vflag*/)
                      style);
   }
   fresh_atoms = 0;
-  check_other_integrators();
-  if (adapt) {
-    // the first step is taken with the timestep as given: keep it in range
-    const double dt = MIN(MAX(update->dt, adapt_dtmin), adapt_dtmax);
-    if (dt != update->dt) {
-      if (comm->me == 0)
-        utils::logmesg(lmp, "Fix {}: timestep {} is outside the adapt range [{}, {}]: using {}\n",
-                       style, update->dt, adapt_dtmin, adapt_dtmax, dt);
-      set_timestep(dt);
-    }
-    energy_scale = fabs(pseudo_energy_now());
-  }
-  if (auto_tol > 0.0) {
+  if (!nodes_at_step_ends(*rule)) others->refuse_interactions(rule->name().c_str());
+  if (steps->adapts()) steps->start_run(style, pseudo_energy_now());
+  if (nested) {
     vprev = potential_now(sample_mask);
-    c_pe->addstep(update->ntimestep + 1);
+    modify->get_compute_by_id(id_pe)->addstep(update->ntimestep + 1);
   }
 }
 
@@ -484,7 +396,13 @@ void FixPEJump::initial_integrate(int /*vflag*/)
 
   h_step = update->dt;
   node_impulses();
-  if (compensate && (hlast2 > 0.0)) compensate_step_change();
+  if (steps->keeps_history()) {
+    grow_work();
+    if (steps->compensate(h_step, group_atoms(), field(VHALF), field(JUMP), fsum)) {
+      cached_step = -1;
+      guard->forget_stats();
+    }
+  }
   check_lists();
   advance(rule->node[rule->primary()] * h_step);
 }
@@ -503,12 +421,10 @@ void FixPEJump::agree_on_started()
   // velocities that are not finite (a velocity command gone wrong, e.g.
   // velocity scale to a negative temperature) would only show up later
   double **v = atom->v;
-  const int *mask = atom->mask;
   bigint bad = 0, all_bad = 0;
-  for (int i = 0; i < atom->nlocal; i++)
-    if ((mask[i] & groupbit) &&
-        !(std::isfinite(v[i][0]) && std::isfinite(v[i][1]) && std::isfinite(v[i][2])))
-      ++bad;
+  for_atoms(nullptr, [&](int i) {
+    if (!(std::isfinite(v[i][0]) && std::isfinite(v[i][1]) && std::isfinite(v[i][2]))) ++bad;
+  });
   MPI_Allreduce(&bad, &all_bad, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   if (all_bad)
     error->all(FLERR,
@@ -529,15 +445,15 @@ void FixPEJump::node_impulses()
 {
   double **v = atom->v;
   double **f = atom->f;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
+  double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
   const bool half_kick = split_primary && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
-  const bool compare = velocity_hooks & BETWEEN_STEPS;
+  const bool compare = others->may_change_velocities(OtherFixes::BETWEEN_STEPS);
   if (!compare && !half_kick) return;
   bool changed = half_kick;
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
+  for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++)
       if (compare && (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k])) {
         vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
@@ -548,10 +464,10 @@ void FixPEJump::node_impulses()
       const double dtfm = dth * inverse_mass_of(i);
       for (int k = 0; k < 3; k++) vhalf[i][k] += dtfm * (f[i][k] - fstart[i][k]);
     }
-  }
+  });
   // the speeds taken at the end of the last step no longer bound the
   // excursion of this step's nodes
-  if (changed) stats_valid = 0;
+  if (changed) guard->forget_stats();
 }
 
 /* ----------------------------------------------------------------------
@@ -565,8 +481,7 @@ void FixPEJump::advance(double t)
 {
   double **x = atom->x;
   double **v = atom->v;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
+  double **vhalf = field(VHALF);
   // on a step that rebuilds the lists, they are built (and atoms exchanged
   // and sorted) at the end node q^{n+1}, as with fix nve, so that a run
   // continued from a restart, which builds them there, reproduces the
@@ -574,12 +489,12 @@ void FixPEJump::advance(double t)
   const bool later = (t != h_step) && rebuild_due();
   const double now = later ? h_step : t;
   advance_pending = later ? t - h_step : 0.0;
-  for (int i = 0; i < nlocal; i++)
-    if (mask[i] & groupbit)
-      for (int k = 0; k < 3; k++) {
-        v[i][k] = vhalf[i][k];
-        x[i][k] += now * vhalf[i][k];
-      }
+  for_atoms(nullptr, [&](int i) {
+    for (int k = 0; k < 3; k++) {
+      v[i][k] = vhalf[i][k];
+      x[i][k] += now * vhalf[i][k];
+    }
+  });
 }
 
 /* ----------------------------------------------------------------------
@@ -590,10 +505,10 @@ void FixPEJump::post_neighbor()
 {
   if (advance_pending == 0.0) return;
   double **x = atom->x;
-  const int *mask = atom->mask;
-  for (int i = 0; i < atom->nlocal; i++)
-    if (mask[i] & groupbit)
-      for (int k = 0; k < 3; k++) x[i][k] += advance_pending * vhalf[i][k];
+  double **vhalf = field(VHALF);
+  for_atoms(nullptr, [&](int i) {
+    for (int k = 0; k < 3; k++) x[i][k] += advance_pending * vhalf[i][k];
+  });
   advance_pending = 0.0;
   comm->forward_comm();
 }
@@ -632,74 +547,23 @@ int FixPEJump::owned_atoms() const
 
 /* ---------------------------------------------------------------------- */
 
-double FixPEJump::inverse_mass_of(int i) const
+double **FixPEJump::field(int which) const
 {
-  return atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]];
+  return state->vec(which);
 }
 
-/* ----------------------------------------------------------------------
-   compensate keyword: with steps h_{n-1}, h_n, h_{n+1} the smooth solution
-   of the jump relation is [v]^n = (h_{n-1} + h_n)/2 a(t_n); the jump
-   [v]^{n+1} = 2 h_n A_n - [v]^n of the last step (A_n its averaged
-   acceleration) falls short of it by
-     d = (h_{n+1} - h_n)/2 a(t_{n+1}) - (h_n - h_{n-1})/2 a(t_n),
-   which feeds the parasitic period-2 mode whenever the step size changes.
-   Add d, with a(t_n), a(t_{n+1}) interpolated linearly from the averages
-   A_{n-1}, A_n of the last two steps (at their mid-step times), less the
-   part along the peculiar velocities w = v^{n+1/2} - V_cm that would
-   change the pseudo-energy (1/2) sum m v^{n+1/2}.v^{n+3/2}; the total
-   momentum is kept too, since sum m a = 0 and sum m w = 0.
-------------------------------------------------------------------------- */
+/* ---------------------------------------------------------------------- */
 
-void FixPEJump::compensate_step_change()
+AtomSet FixPEJump::group_atoms(const AtomList *only) const
 {
-  const double h0 = hlast2, h1 = hlast, h2 = h_step;    // h_{n-1}, h_n, h_{n+1}
-  if ((h2 - h1 == 0.0) && (h1 - h0 == 0.0)) return;
-  const double slope = 1.0 / (0.5 * (h0 + h1));    // per (A_n - A_{n-1})
-  const double c_end = 0.5 * (h2 - h1), c_start = 0.5 * (h1 - h0);
+  return {groupbit, only};
+}
 
-  double **v = atom->v;
-  const double *rmass = atom->rmass;
-  const int *type = atom->type;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  const double ftm2v = force->ftm2v;
+/* ---------------------------------------------------------------------- */
 
-  // d (velocity units) into fsum, which is free until the quadrature of this step
-  // sums m of: v.d, v.v, and sum m v, sum m (v = v^{n+1/2})
-  double local[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    const double m = rmass ? rmass[i] : atom->mass[type[i]];
-    const double minv = rmass ? 1.0 / rmass[i] : inverse_mass[type[i]];
-    for (int k = 0; k < 3; k++) {
-      const double an = ftm2v * minv * fhist1[i][k];
-      const double ds = 0.5 * h1 * slope * (an - ftm2v * minv * fhist2[i][k]);
-      fsum[i][k] = c_end * (an + ds) - c_start * (an - ds);
-      const double vk = vhalf[i][k] - jump[i][k];
-      local[0] += m * vk * fsum[i][k];
-      local[1] += m * vk * vk;
-      local[2 + k] += m * vk;
-    }
-    local[5] += m;
-  }
-  double sum[6];
-  MPI_Allreduce(local, sum, 6, MPI_DOUBLE, MPI_SUM, world);
-  const double vcm[3] = {sum[2] / sum[5], sum[3] / sum[5], sum[4] / sum[5]};
-  const double ww = sum[1] - (sum[2] * sum[2] + sum[3] * sum[3] + sum[4] * sum[4]) / sum[5];
-  const double alpha = (ww > 0.0) ? sum[0] / ww : 0.0;
-
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    for (int k = 0; k < 3; k++) {
-      const double delta = fsum[i][k] - alpha * (vhalf[i][k] - jump[i][k] - vcm[k]);
-      jump[i][k] += delta;
-      vhalf[i][k] += delta;
-      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-    }
-  }
-  cached_step = -1;
-  stats_valid = 0;
+double FixPEJump::inverse_mass_of(int i) const
+{
+  return atom->rmass ? 1.0 / atom->rmass[i] : 1.0 / atom->mass[atom->type[i]];
 }
 
 /* ----------------------------------------------------------------------
@@ -750,35 +614,32 @@ void FixPEJump::final_integrate()
   evals_step = 1.0;
 
   // velocities changed by other fixes during the step (wall/reflect, ...)
-  if (velocity_hooks & INSIDE_STEP) {
+  if (others->may_change_velocities(OtherFixes::INSIDE_STEP)) {
     double **v = atom->v;
-    const int *mask = atom->mask;
-    for (int i = 0; i < atom->nlocal; i++)
-      if (mask[i] & groupbit)
-        for (int k = 0; k < 3; k++)
-          if (v[i][k] != vhalf[i][k]) vhalf[i][k] = v[i][k];
+    double **vhalf = field(VHALF);
+    for_atoms(nullptr, [&](int i) {
+      for (int k = 0; k < 3; k++)
+        if (v[i][k] != vhalf[i][k]) vhalf[i][k] = v[i][k];
+    });
   }
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
-  const bool direct = (rule->size() == 1) && !split_primary && !adapt;
+  const bool direct = (rule->size() == 1) && !split_primary && !steps->adapts();
   if (!direct) quadrature_sum();
   double **favg = direct ? atom->f : fsum;
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
-  if (fhist1) std::swap(fhist1, fhist2);
   double mag[2] = {0.0, 0.0};
   finish_step(nullptr, favg, rest, mag);
-  stats[0] = std::isfinite(mag[0]) ? mag[0] : BLOWUP;
-  stats[1] = std::isfinite(mag[1]) ? mag[1] : BLOWUP;
-  stats_valid = 1;
+  guard->set_stats(mag[0], mag[1]);
 
   if (rest != 0.0) tally_at_node();
-  if (others_bits && (neighbor->ago == 0)) check_other_integrators();
+  if (others->integrate_others() && (neighbor->ago == 0) && !nodes_at_step_ends(*rule))
+    others->refuse_interactions(rule->name().c_str());
   evals_total += evals_step;
   cached_step = -1;
-  hlast2 = hlast;
-  hlast = h_step;
+  steps->step_done(h_step);
 }
 
 /* ----------------------------------------------------------------------
@@ -786,7 +647,7 @@ void FixPEJump::final_integrate()
    the quadrature sums favg of their forces over the step h_step and move on
    by rest from the primary node to q^{n+1}; the start-node forces of the
    next step and the force history are kept. mag[0], mag[1]: the largest
-   |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for check_excursion()
+   |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for the stability guard
 ------------------------------------------------------------------------- */
 
 void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, double *mag)
@@ -794,8 +655,12 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   double **x = atom->x;
   double **v = atom->v;
   double **f = atom->f;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
+  const bool keep_start = rule->has_end_nodes();
+  double **fstart = keep_start ? field(FSTART) : nullptr;
+  double **fhist = only ? nullptr : steps->next_history();
   const double kick = 2.0 * h_step * force->ftm2v;
-  const int keep_start = rule->has_end_nodes();
   // forces not integrated by the rule: an impulse at the centre of the step
   // (position Verlet), or at its end node half now and half at the start of
   // the next step (velocity Verlet)
@@ -820,7 +685,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
       }
     for (int k = 0; k < 3; k++) {
       if (keep_start) fstart[i][k] = fsample[i][k];
-      if (fhist1) fhist1[i][k] = favg[i][k];
+      if (fhist) fhist[i][k] = favg[i][k];
     }
     vv = MAX(vv, vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
     jj = MAX(jj, jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
@@ -835,38 +700,23 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
 void FixPEJump::jump_atom(int i, double h, const double *favg)
 {
   const double dtfm = 2.0 * h * force->ftm2v * inverse_mass_of(i);
-  two_step_jump(dtfm, favg, jump[i], vhalf[i], atom->v[i]);
-}
-
-/* ----------------------------------------------------------------------
-   true if anything looks at the atoms after this step: output, the end of
-   the run, or a fix acting at the end of this step
-------------------------------------------------------------------------- */
-
-bool FixPEJump::step_observed() const
-{
-  const bigint now = update->ntimestep;
-  if ((now == output->next) || (now == update->laststep)) return true;
-  for (const int every : end_of_step_every)
-    if (now % every == 0) return true;
-  return false;
+  two_step_jump(dtfm, favg, field(JUMP)[i], field(VHALF)[i], atom->v[i]);
 }
 
 /* ----------------------------------------------------------------------
    the atoms are at the node q^{n+1} but the last force evaluation was
    elsewhere: on steps that tally energy or virial evaluate everything
-   once more at the node; on output steps bring the ghosts to the node
+   once more at the node (the forces there replace those of the primary
+   node, which the next step does not use); on output steps bring the
+   ghosts to the node
 ------------------------------------------------------------------------- */
 
 void FixPEJump::tally_at_node()
 {
-  const int nlocal = atom->nlocal;
   if (eflag_step || vflag_step) {
-    if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
     sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
-    if (nlocal) memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
     evals_step += 1.0;
-  } else if (step_observed()) {
+  } else if (others->step_observed()) {
     comm->forward_comm();
   }
 }
@@ -877,7 +727,7 @@ void FixPEJump::tally_at_node()
 
 void FixPEJump::post_run()
 {
-  if ((auto_tol > 0.0) && (comm->me == 0))
+  if (nested && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {} quadrature auto {}: steps with lobatto 2: {}, lobatto 3: {}, "
                    "lobatto 5: {}\n",
@@ -889,7 +739,7 @@ void FixPEJump::post_run()
 
 void FixPEJump::end_of_step()
 {
-  if (adapt) choose_next_dt();
+  if (steps->adapts()) steps->choose_next(group_atoms(), fsum, field(JUMP));
 }
 
 /* ----------------------------------------------------------------------
@@ -916,22 +766,20 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   // the jump takes the forces that the rule integrates
   double **v = atom->v;
   double **f = split_primary ? fsample : atom->f;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
   const double *rmass = atom->rmass;
   const double *mass = atom->mass;
   const int *type = atom->type;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
   const double kick = (init_style == INIT_KICK) ? force->ftm2v : 0.0;
-
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
+  for_atoms(nullptr, [&](int i) {
     const double dtfm = kick * kick_step(i) / (rmass ? rmass[i] : mass[type[i]]);
     for (int k = 0; k < 3; k++) {
       jump[i][k] = dtfm * f[i][k];
       vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
       v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
     }
-  }
+  });
 
   // fixes defined after this one act on the forces after its setup(): redo
   // the initial kick with the complete forces at the first step
@@ -939,8 +787,8 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   reinit_pending =
       with_start && (init_style == INIT_KICK) && !split_primary && sampler->has_projections();
   started = 1;
-  hlast = hlast2 = 0.0;
-  stats_valid = 0;
+  steps->forget();
+  guard->forget_stats();
   cached_step = -1;
 }
 
@@ -958,11 +806,10 @@ double FixPEJump::kick_step(int /*i*/) const
 void FixPEJump::store_start_node()
 {
   primary_sampled_force();
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  for (int i = 0; i < nlocal; i++)
-    if (mask[i] & groupbit)
-      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+  double **fstart = field(FSTART);
+  for_atoms(nullptr, [&](int i) {
+    for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+  });
 }
 
 /* ----------------------------------------------------------------------
@@ -980,12 +827,9 @@ void FixPEJump::primary_sampled_force()
   } else if (use_copy) {
     if (force->newton) comm->reverse_comm(this);
   } else {
-    if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], nbytes);
+    NodeSampler::Keep keep(*nodes);
     sampler->compute(sample_mask, 0, 0);
-    if (nlocal) {
-      memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
-      memcpy(&atom->f[0][0], &fsave[0][0], nbytes);
-    }
+    if (nlocal) memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
     evals_step += sampler->fraction(sample_mask);
   }
   // at setup, fixes after this one have not yet acted on the forces
@@ -999,17 +843,11 @@ void FixPEJump::primary_sampled_force()
 
 void FixPEJump::project_sampled()
 {
-  double **f = atom->f;
+  NodeSampler::Keep keep(*nodes);
   const size_t nbytes = 3 * sizeof(double) * atom->nlocal;
-  if (!nbytes) {
-    sampler->project();
-    return;
-  }
-  memcpy(&fsave[0][0], &f[0][0], nbytes);
-  memcpy(&f[0][0], &fsample[0][0], nbytes);
+  if (nbytes) memcpy(&atom->f[0][0], &fsample[0][0], nbytes);
   sampler->project();
-  memcpy(&fsample[0][0], &f[0][0], nbytes);
-  memcpy(&f[0][0], &fsave[0][0], nbytes);
+  if (nbytes) memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
 }
 
 /* ----------------------------------------------------------------------
@@ -1026,12 +864,15 @@ void FixPEJump::refresh_start_nodes()
 
   // the new atoms (start node still unknown) also get the initial kick
   AtomList fresh;
-  const int *mask = atom->mask;
-  for (int i = 0; i < atom->nlocal; i++)
-    if ((mask[i] & groupbit) && std::isnan(fstart[i][0])) fresh.push_back(i);
+  double **fstart = field(FSTART);
+  for_atoms(nullptr, [&](int i) {
+    if (std::isnan(fstart[i][0])) fresh.push_back(i);
+  });
   store_start_node();
   if (init_style != INIT_KICK) return;
   double **v = atom->v;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
   for (const int i : fresh) {
     const double dtfm = force->ftm2v * update->dt * inverse_mass_of(i);
     for (int k = 0; k < 3; k++) {
@@ -1050,199 +891,118 @@ void FixPEJump::refresh_start_nodes()
 
 void FixPEJump::quadrature_sum()
 {
-  if (auto_tol > 0.0) {
+  if (nested) {
     auto_quadrature_sum();
     return;
   }
 
-  double **f = atom->f;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
   const int p = rule->primary();
   const double wp = rule->weight[p];
   const int reuse_start = rule->has_end_nodes();
+  double **fstart = reuse_start ? field(FSTART) : nullptr;
 
   if (split_primary || reuse_start) primary_sampled_force();
 
-  double **fp = split_primary ? fsample : f;
-  const auto start_sum = [&](int i) {
+  double **fp = split_primary ? fsample : atom->f;
+  for_atoms(node_select, [&](int i) {
     if (reuse_start && std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
     for (int k = 0; k < 3; k++) {
       fsum[i][k] = wp * fp[i][k];
       if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
     }
-  };
-  for_atoms(node_select, start_sum);
+  });
 
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
-  sample_nodes(first, p, h_step, -rule->node[p] * h_step, node_select, fsum, nullptr);
+  const int evaluated =
+      nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, field(VHALF),
+                       group_atoms(node_select), sample_mask, fsum, nullptr);
+  evals_step += evaluated * node_cost();
 }
 
 /* ----------------------------------------------------------------------
-   quadrature auto: the nested Gauss-Lobatto rules with 2 (nodes 0, 1),
-   3 (also 1/2) and 5 points (also (1 -+ sqrt(3/7))/2). The start node is
-   the previous end node, the end node the Verlet evaluation, which also
-   tallies the potential energy V(q^{n+1}) (the fix requests it every step).
-   The pseudo-energy defect of this step with rule r is then known before
-   the jump: D_r = V(q^{n+1}) - V(q^n) + h sum_i v_i^{n+1/2} . I_r,i with
-   I_r the quadrature average of the forces. The step takes the first rule
-   of 2, 3, 5 points with |D_r| <= TOL (1, 2 or 4 evaluations), else the
-   5-point rule.
+   quadrature auto: the nested Gauss-Lobatto rules with 2, 3 and 5 points.
+   The start node is the previous end node, the end node the Verlet
+   evaluation, which also tallies the potential energy V(q^{n+1}) (the fix
+   requests it every step). The pseudo-energy defect of this step with rule
+   r is then known before the jump: D_r = V(q^{n+1}) - V(q^n) + h sum_i
+   v_i^{n+1/2} . I_r,i with I_r the quadrature average of the forces. The
+   step takes the first rule with |D_r| <= TOL (1, 2 or 4 evaluations),
+   else the finest. The forces at a node are kept while a finer rule still
+   uses them (the middle node): fnode.
 ------------------------------------------------------------------------- */
 
 void FixPEJump::auto_quadrature_sum()
 {
   double **f = atom->f;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  const double h = h_step;
-  const std::vector<double> &c = rule->node;    // lobatto 5: 0, c1, 1/2, c3, 1
-  const std::vector<double> &w = rule->weight;
+  double **fstart = field(FSTART);
+  double **vhalf = field(VHALF);
 
   primary_sampled_force();    // F(1) into fsample
-  for (int i = 0; i < nlocal; i++)
-    if ((mask[i] & groupbit) && std::isnan(fstart[i][0]))
+  for_atoms(nullptr, [&](int i) {
+    if (std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+  });
   const double vnew = (update->eflag_global == update->ntimestep) ? sampler->energy(sample_mask)
                                                                   : potential_now(sample_mask);
   const double dv = vnew - vprev;
   vprev = vnew;
-  c_pe->addstep(update->ntimestep + 1);
+  modify->get_compute_by_id(id_pe)->addstep(update->ntimestep + 1);
 
-  // defect of the rule whose quadrature average is in fsum
-  const auto defect = [&]() {
-    double local = 0.0, global = 0.0;
-    for (int i = 0; i < nlocal; i++)
-      if (mask[i] & groupbit)
-        local += vhalf[i][0] * fsum[i][0] + vhalf[i][1] * fsum[i][1] + vhalf[i][2] * fsum[i][2];
-    MPI_Allreduce(&local, &global, 1, MPI_DOUBLE, MPI_SUM, world);
-    return fabs(dv + h * global);
+  // forces at node j of a level's rule: kept ones, or evaluated now
+  const auto kept = [&](int level, int j) -> double ** {
+    const double c = nested->rule(level).node[j];
+    if (c == 0.0) return fstart;
+    if (c == 1.0) return fsample;
+    return nested->added(level, j) ? nullptr : fnode;
   };
-
-  for (int i = 0; i < nlocal; i++)
-    if (mask[i] & groupbit)
-      for (int k = 0; k < 3; k++) fsum[i][k] = 0.5 * (fstart[i][k] + fsample[i][k]);
-  int used = 0;
-  if (defect() > auto_tol) {
-    save_positions(nullptr);
-    if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
-
-    evaluate_at((c[2] - 1.0) * h, nullptr);
-    for (int i = 0; i < nlocal; i++)
-      if (mask[i] & groupbit)
-        for (int k = 0; k < 3; k++) {
-          fnode[i][k] = f[i][k];
-          fsum[i][k] = (fstart[i][k] + 4.0 * f[i][k] + fsample[i][k]) / 6.0;
+  int level = 0;
+  std::unique_ptr<NodeSampler::Keep> keep;
+  while (true) {
+    const Quadrature &r = nested->rule(level);
+    const bool last = (level + 1 == nested->levels());
+    for_atoms(nullptr, [&](int i) {
+      for (int k = 0; k < 3; k++) fsum[i][k] = 0.0;
+    });
+    for (int j = 0; j < r.size(); j++) {
+      double **fj = kept(level, j);
+      if (!fj) {
+        if (!keep) keep = std::make_unique<NodeSampler::Keep>(*nodes, NodeSampler::ALL_OWNED);
+        nodes->evaluate_at((r.node[j] - 1.0) * h_step, vhalf, group_atoms(), sample_mask);
+        evals_step += node_cost();
+        fj = f;
+        if (!last) {
+          for_atoms(nullptr, [&](int i) {
+            for (int k = 0; k < 3; k++) fnode[i][k] = f[i][k];
+          });
         }
-    used = 1;
-    if (defect() > auto_tol) {
-      for (int i = 0; i < nlocal; i++)
-        if (mask[i] & groupbit)
-          for (int k = 0; k < 3; k++)
-            fsum[i][k] = w[0] * fstart[i][k] + w[2] * fnode[i][k] + w[4] * fsample[i][k];
-      for (int node : {1, 3}) {
-        evaluate_at((c[node] - 1.0) * h, nullptr);
-        for (int i = 0; i < nlocal; i++)
-          if (mask[i] & groupbit)
-            for (int k = 0; k < 3; k++) fsum[i][k] += w[node] * f[i][k];
       }
-      used = 2;
+      const double w = r.weight[j];
+      for_atoms(nullptr, [&](int i) {
+        for (int k = 0; k < 3; k++) fsum[i][k] += w * fj[i][k];
+      });
     }
-    restore_positions(nullptr);
-    if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
+    if (last || (auto_defect(dv) <= auto_tol)) break;
+    ++level;
   }
-  ++auto_steps[used];
+  keep.reset();
+  ++auto_steps[level];
 }
 
 /* ----------------------------------------------------------------------
-   move the owned atoms of the group (those listed in only, if given) to
-   xsave + shift v^{n+1/2} and evaluate the sampled forces there
+   defect of the rule whose quadrature average is in fsum
 ------------------------------------------------------------------------- */
 
-void FixPEJump::evaluate_at(double shift, const AtomList *only)
+double FixPEJump::auto_defect(double dv) const
 {
-  double **x = atom->x;
-  const auto move = [&](int i) {
-    x[i][0] = xsave[i][0] + shift * vhalf[i][0];
-    x[i][1] = xsave[i][1] + shift * vhalf[i][1];
-    x[i][2] = xsave[i][2] + shift * vhalf[i][2];
-  };
-  for_atoms(only, move);
-  sampler->compute(sample_mask, 0, 0);
-  evals_step += node_cost();
-}
-
-/* ----------------------------------------------------------------------
-   acc += sum_k w_k F(q_k) over the nodes k = first .. N-1 except skip, with
-   q_k = x + (scale c_k + offset) v^{n+1/2} for the owned atoms of the group
-   (those listed in only, if given); all other atoms stay where they are.
-   fend (if given) receives the forces at the last node. Positions and
-   forces are restored afterwards
-------------------------------------------------------------------------- */
-
-void FixPEJump::sample_nodes(int first, int skip, double scale, double offset, const AtomList *only,
-                             double **acc, double **fend)
-{
-  double **f = atom->f;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  const int last = rule->size() - 1;
-
-  save_positions(only);
-  if (nlocal) memcpy(&fsave[0][0], &f[0][0], 3 * sizeof(double) * nlocal);
-
-  for (int node = first; node <= last; node++) {
-    if (node == skip) continue;
-    evaluate_at(scale * rule->node[node] + offset, only);
-    const double w = rule->weight[node];
-    const bool at_end = fend && (node == last);
-    const auto add = [&](int i) {
-      acc[i][0] += w * f[i][0];
-      acc[i][1] += w * f[i][1];
-      acc[i][2] += w * f[i][2];
-      if (at_end)
-        for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
-    };
-    for_atoms(only, add);
-  }
-
-  restore_positions(only);
-  if (nlocal) memcpy(&f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
-}
-
-/* ----------------------------------------------------------------------
-   positions of the owned atoms that evaluate_at() moves, kept in xsave.
-   The ghosts are not restored: they are brought up to date by the forward
-   communication before their next use (the next force evaluation, and on
-   steps with output or end-of-step fixes, tally_at_node())
-------------------------------------------------------------------------- */
-
-void FixPEJump::save_positions(const AtomList *only)
-{
-  double **x = atom->x;
-  const int nlocal = atom->nlocal;
-  if (!only) {
-    if (nlocal) memcpy(&xsave[0][0], &x[0][0], 3 * sizeof(double) * nlocal);
-    return;
-  }
-  for (const int i : *only)
-    for (int k = 0; k < 3; k++) xsave[i][k] = x[i][k];
-}
-
-/* ---------------------------------------------------------------------- */
-
-void FixPEJump::restore_positions(const AtomList *only)
-{
-  double **x = atom->x;
-  const int nlocal = atom->nlocal;
-  if (!only) {
-    if (nlocal) memcpy(&x[0][0], &xsave[0][0], 3 * sizeof(double) * nlocal);
-    return;
-  }
-  for (const int i : *only)
-    for (int k = 0; k < 3; k++) x[i][k] = xsave[i][k];
+  double **vhalf = field(VHALF);
+  double local = 0.0, global = 0.0;
+  for_atoms(nullptr, [&](int i) {
+    local += vhalf[i][0] * fsum[i][0] + vhalf[i][1] * fsum[i][1] + vhalf[i][2] * fsum[i][2];
+  });
+  MPI_Allreduce(&local, &global, 1, MPI_DOUBLE, MPI_SUM, world);
+  return fabs(dv + h_step * global);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1253,135 +1013,67 @@ double FixPEJump::node_cost()
 }
 
 /* ----------------------------------------------------------------------
-   before moving: the positions where forces are evaluated in this step lie
-   on the segments x + t v^{n+1/2}, t in [lo, hi], so the neighbor lists stay
-   valid for all of them if the ends are within half the skin of the
-   positions of the last build; otherwise request a rebuild at this step.
-   Atoms with select[i] != 0 (the slow atoms of pe_jump/async) take steps of
-   size hsel and are also evaluated for t in [lo2, hi2] (the coarse nodes),
-   a span that a rebuild at the primary node must cover as well.
-   Also catch the unbounded growth of the momentum jumps that marks a time
-   step beyond the stability limit.
+   before moving: the nodes of this step lie on x + t v^{n+1/2}, t in
+   [lo, hi]; the stability guard measures them (the magnitudes were taken
+   by final_integrate() unless a velocity changed since), and none if the
+   Verlet loop's own check covers the only node
 ------------------------------------------------------------------------- */
 
-void FixPEJump::check_excursion(double lo, double hi, const int *select, double lo2, double hi2,
-                                double hsel, const double *lag)
+void FixPEJump::check_excursion(double lo, double hi)
 {
-  double **x = atom->x;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
   const double cp = rule->node[rule->primary()] * h_step;
-  // if forces are evaluated at the primary node only, the neighbor list
-  // check of the Verlet loop itself covers them
-  const bool primary_only = !select && (lo == cp) && (hi == cp);
+  const bool primary_only = (lo == cp) && (hi == cp);
   double **xhold = (neighbor->dist_check && !primary_only) ? neighbor->get_xhold() : nullptr;
 
-  // excursion^2, step length^2, jump displacement^2, |[v]|^2, |v^{n+1/2}|^2
-  double local[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
-  if (stats_valid && !select) {
-    // the magnitudes were taken by final_integrate(); only the nodes'
-    // excursions are left, and none if the Verlet loop checks the only node
-    local[1] = h_step * h_step * stats[0];
-    local[2] = h_step * h_step * stats[1];
-    local[3] = stats[1];
-    local[4] = stats[0];
-    if (xhold) local[0] = node_excursion(xhold, lo, hi, nullptr);
+  double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  if (guard->has_stats()) {
+    local[1] = h_step * h_step * guard->speed2();
+    local[2] = h_step * h_step * guard->jump2();
+    local[3] = guard->jump2();
+    local[4] = guard->speed2();
+    if (xhold) local[0] = guard->excursion(group_atoms(), field(VHALF), xhold, lo, hi);
   } else {
-    for (int i = 0; i < nlocal; i++) {
-      if (!(mask[i] & groupbit)) continue;
-      const bool both = select && select[i];
-      const double h = both ? hsel : h_step;
-      const double late = lag ? lag[i] : 0.0;
-      double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
-      for (int k = 0; k < 3; k++) {
-        vv += vhalf[i][k] * vhalf[i][k];
-        jj += jump[i][k] * jump[i][k];
-        if (xhold) {
-          const double a = x[i][k] - xhold[i][k];
-          const double ends[4] = {a + lo * vhalf[i][k], a + hi * vhalf[i][k],
-                                  a + (lo2 + late) * vhalf[i][k], a + (hi2 + late) * vhalf[i][k]};
-          for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
-        }
-      }
-      double span = h;
-      if (both) span = MAX(span, MAX(fabs(lo2 - cp), fabs(hi2 - cp)));
-      double step = span * span * vv, jmp = h * h * jj;
-      if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = vv = jj = BLOWUP;
-      local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
-      local[1] = MAX(local[1], step);
-      local[2] = MAX(local[2], jmp);
-      local[3] = MAX(local[3], jj);
-      local[4] = MAX(local[4], vv);
-    }
+    const StabilityGuard::Nodes at{h_step, lo, hi, cp, nullptr, 0.0, 0.0, 0.0, nullptr};
+    guard->measure(group_atoms(), field(VHALF), field(JUMP), xhold, at, local);
   }
   finish_check(local);
 }
 
 /* ----------------------------------------------------------------------
-   largest squared distance from the positions of the last neighbor list
-   build xhold of the nodes x + t v^{n+1/2}, t = lo and hi, of the owned
-   atoms of the group (those listed in only, if given)
-------------------------------------------------------------------------- */
-
-double FixPEJump::node_excursion(double **xhold, double lo, double hi, const AtomList *only) const
-{
-  double **x = atom->x;
-  double worst = 0.0;
-  const auto excursion = [&](int i) {
-    double dlo = 0.0, dhi = 0.0;
-    for (int k = 0; k < 3; k++) {
-      const double a = x[i][k] - xhold[i][k];
-      dlo += (a + lo * vhalf[i][k]) * (a + lo * vhalf[i][k]);
-      dhi += (a + hi * vhalf[i][k]) * (a + hi * vhalf[i][k]);
-    }
-    worst = MAX(worst, MAX(dlo, dhi));
-  };
-  for_atoms(only, excursion);
-  return worst;
-}
-
-/* ----------------------------------------------------------------------
-   local = largest excursion^2 from the last build positions (0 if not
-   checked), step length^2, jump displacement^2 (h |[v]|)^2, |[v]|^2 and
-   |v^{n+1/2}|^2 of the local atoms. The scheme is unstable if the jumps
-   have grown by more than STOP_GROWTH since the first steps of the run, or
-   by more than HINT_GROWTH while moving atoms (or their jumps) by more than
-   half the skin; a large step that is stable only needs a larger skin.
-   Otherwise request a rebuild where the nodes leave the skin.
+   reduce the guard's measures (with them, whether another fix changed a
+   velocity: damp auto damps the parasitic mode from then on) and act on
+   the verdict
 ------------------------------------------------------------------------- */
 
 void FixPEJump::finish_check(const double *local)
 {
-  // the same reduction tells whether another fix changed a velocity: then
-  // damp auto damps the parasitic mode from now on in this run
-  double values[6] = {local[0], local[1], local[2],
-                      local[3], local[4], static_cast<double>(impulse_local)};
-  double global[6];
-  MPI_Allreduce(values, global, 6, MPI_DOUBLE, MPI_MAX, world);
+  double values[StabilityGuard::NMEASURES + 1], global[StabilityGuard::NMEASURES + 1];
+  for (int k = 0; k < StabilityGuard::NMEASURES; k++) values[k] = local[k];
+  values[StabilityGuard::NMEASURES] = impulse_local;
+  MPI_Allreduce(values, global, StabilityGuard::NMEASURES + 1, MPI_DOUBLE, MPI_MAX, world);
   impulse_local = 0;
-  if ((global[5] > 0.0) && (damp_time < 0.0)) damping = 1;
+  if ((global[StabilityGuard::NMEASURES] > 0.0) && (damp_time < 0.0)) damping = 1;
 
-  // reference magnitude: the largest jump or velocity at the start of the run
-  // (at the first step where anything moves)
-  if (jump_ref == 0.0) jump_ref = MAX(global[3], global[4]);
-  const double growth = (jump_ref > 0.0) ? sqrt(global[3] / jump_ref) : 0.0;
-
-  const double half_skin = 0.5 * neighbor->skin;
-  const double limit = (half_skin > 0.0) ? half_skin * half_skin : BLOWUP;
-  const bool large = (global[1] >= limit) || (global[2] >= limit);
-  if ((growth >= STOP_GROWTH) || (large && (growth >= HINT_GROWTH))) {
-    energies();
-    error->all(FLERR,
-               "Fix {} is unstable at step {}: the momentum jumps grew {:.3g}-fold since the "
-               "start of the run (jump energy {:.8g}). {}",
-               style, update->ntimestep, growth, cached[1], instability_advice());
+  switch (guard->judge(global)) {
+    case StabilityGuard::UNSTABLE:
+      energies();
+      error->all(FLERR,
+                 "Fix {} is unstable at step {}: the momentum jumps grew {:.3g}-fold since the "
+                 "start of the run (jump energy {:.8g}). {}",
+                 style, update->ntimestep, guard->growth(), cached[1], instability_advice());
+      break;
+    case StabilityGuard::TOO_FAR:
+      error->all(FLERR,
+                 "Fix {}: atoms move more than half the neighbor skin ({}) between the force "
+                 "evaluations of step {}: reduce the time step (or K) or increase the skin",
+                 style, neighbor->skin, update->ntimestep);
+      break;
+    case StabilityGuard::REBUILD:
+      next_reneighbor = update->ntimestep;
+      break;
+    case StabilityGuard::FINE:
+      break;
   }
-  if (global[1] >= limit)
-    error->all(FLERR,
-               "Fix {}: atoms move more than half the neighbor skin ({}) between the force "
-               "evaluations of step {}: reduce the time step (or K) or increase the skin",
-               style, neighbor->skin, update->ntimestep);
-  if (global[0] > limit) next_reneighbor = update->ntimestep;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1395,115 +1087,12 @@ bool FixPEJump::can_reverse() const
 
 std::string FixPEJump::instability_advice() const
 {
-  return fmt::format(
-      "The time step {} is beyond the stability limit of the fastest motion (for "
-      "masses m joined by springs of stiffness k in a chain, dt < sqrt(m/k); "
-      "bond_style harmonic has k = 2K): {}",
-      h_step, adapt ? "lower the adapt dtmin or eps" : "reduce it, or use the adapt keyword");
-}
-
-/* ----------------------------------------------------------------------
-   forward rule for the adaptive step: the next jump is predicted as
-   [v]^{n+2} ~ 2 h' a' - [v]^{n+1}, a' the quadrature-averaged force of the
-   next step extrapolated linearly from this step's and the previous one's
-   (a' = a + (h' + h)/(h + h_prev) (a - a_prev), mid-step times), so the
-   predicted jump is h' P + h'^2 Q - [v]^{n+1}. Take the largest h' (growing
-   by at most ADAPT_GROWTH per step) with (1/8) sum m |[v]^{n+2}|^2 <=
-   ADAPT_SAFETY * eps * E, E = max(|pseudo-energy at the start of the
-   run|, kinetic energy); if no h' meets it, the h' of the smallest jump.
-   Without a previous step (first step of a run) a' = a.
-------------------------------------------------------------------------- */
-
-void FixPEJump::choose_next_dt()
-{
-  double **v = atom->v;
-  const double *rmass = atom->rmass;
-  const double *mass = atom->mass;
-  const int *type = atom->type;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  const double h = update->dt;
-  const bool extrapolate = (hlast2 > 0.0);    // fhist2 holds the previous step's average
-  const double c1 = extrapolate ? h / (h + hlast2) : 0.0;
-  const double c2 = extrapolate ? 1.0 / (h + hlast2) : 0.0;
-
-  // sum m of: P.P, P.Q, Q.Q, P.J, Q.J, J.J, v.v
-  double local[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    const double m = rmass ? rmass[i] : mass[type[i]];
-    for (int k = 0; k < 3; k++) {
-      const double a = force->ftm2v * fsum[i][k] / m;
-      const double da = extrapolate ? a - force->ftm2v * fhist2[i][k] / m : 0.0;
-      const double P = 2.0 * (a + c1 * da), Q = 2.0 * c2 * da, J = jump[i][k];
-      local[0] += m * P * P;
-      local[1] += m * P * Q;
-      local[2] += m * Q * Q;
-      local[3] += m * P * J;
-      local[4] += m * Q * J;
-      local[5] += m * J * J;
-      local[6] += m * v[i][k] * v[i][k];
-    }
-  }
-  double sum[7];
-  MPI_Allreduce(local, sum, 7, MPI_DOUBLE, MPI_SUM, world);
-
-  const double mvv2e = force->mvv2e;
-  const double scale = MAX(energy_scale, 0.5 * mvv2e * sum[6]);
-  const double target = 8.0 * ADAPT_SAFETY * adapt_eps * scale / mvv2e;
-  const auto jump8 = [&sum](double t) {    // 8/mvv2e times the predicted jump energy
-    return t * t * sum[0] + 2.0 * t * t * t * sum[1] + t * t * t * t * sum[2] - 2.0 * t * sum[3] -
-        2.0 * t * t * sum[4] + sum[5];
-  };
-  const double hcap = MIN(adapt_dtmax, ADAPT_GROWTH * h);
-  const double hlow = MIN(adapt_dtmin, hcap);
-
-  // largest step meeting the bound: scan down from hcap, then bisect
-  double hnew = hcap;
-  if (jump8(hcap) > target) {
-    const double ratio = pow(hlow / hcap, 1.0 / ADAPT_SAMPLES);
-    double above = hcap, best = hcap, best_value = jump8(hcap);
-    hnew = -1.0;
-    for (int n = 1; (n <= ADAPT_SAMPLES) && (hnew < 0.0); n++) {
-      const double t = hcap * pow(ratio, n);
-      const double value = jump8(t);
-      if (value <= target) {
-        // the bound holds at t but not at above: bisect in between
-        double good = t;
-        for (int iter = 0; iter < ADAPT_BISECT; iter++) {
-          const double mid = 0.5 * (good + above);
-          if (jump8(mid) <= target)
-            good = mid;
-          else
-            above = mid;
-        }
-        hnew = good;
-      } else {
-        if (value < best_value) {
-          best = t;
-          best_value = value;
-        }
-        above = t;
-      }
-    }
-    if (hnew < 0.0) hnew = best;    // no step meets the bound: the smallest jump
-  }
-  hnew = MAX(hnew, adapt_dtmin);
-  if (hnew != update->dt) set_timestep(hnew);
-}
-
-/* ----------------------------------------------------------------------
-   change the time step the way fix dt/reset does
-------------------------------------------------------------------------- */
-
-void FixPEJump::set_timestep(double dt)
-{
-  update->update_time();
-  update->dt = dt;
-  update->dt_default = 0;
-  if (force->pair) force->pair->reset_dt();
-  for (auto &ifix : modify->get_fix_list()) ifix->reset_dt();
-  output->reset_dt();
+  return fmt::format("The time step {} is beyond the stability limit of the fastest motion (for "
+                     "masses m joined by springs of stiffness k in a chain, dt < sqrt(m/k); "
+                     "bond_style harmonic has k = 2K): {}",
+                     h_step,
+                     steps->adapts() ? "lower the adapt dtmin or eps"
+                                     : "reduce it, or use the adapt keyword");
 }
 
 /* ----------------------------------------------------------------------
@@ -1515,30 +1104,28 @@ void FixPEJump::set_timestep(double dt)
 int FixPEJump::detect_velocity_change()
 {
   double **v = atom->v;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
 
   int local[2] = {0, 0};    // some differ, some are not reversed
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
+  for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++) {
       const double vnode = vhalf[i][k] - 0.5 * jump[i][k];
       if (v[i][k] != vnode) local[0] = 1;
       if (v[i][k] != -vnode) local[1] = 1;
     }
-  }
+  });
   int global[2];
   MPI_Allreduce(local, global, 2, MPI_INT, MPI_MAX, world);
   if (!global[0]) return 0;
   if (global[1] || !can_reverse()) return 2;
 
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
+  for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++) {
       vhalf[i][k] = jump[i][k] - vhalf[i][k];
       v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
     }
-  }
+  });
   cached_step = -1;
   return 1;
 }
@@ -1566,11 +1153,8 @@ double FixPEJump::pseudo_energy_now()
 
 double FixPEJump::potential_now(int mask)
 {
-  grow_work();
-  const int nlocal = atom->nlocal;
-  if (nlocal) memcpy(&fsave[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
+  NodeSampler::Keep keep(*nodes);
   sampler->compute(mask, ENERGY_GLOBAL, 0);
-  if (nlocal) memcpy(&atom->f[0][0], &fsave[0][0], 3 * sizeof(double) * nlocal);
   return sampler->energy(mask);
 }
 
@@ -1583,21 +1167,16 @@ void FixPEJump::energies()
 {
   if (cached_step == update->ntimestep) return;
 
-  const double *rmass = atom->rmass;
-  const double *mass = atom->mass;
-  const int *type = atom->type;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
   double local[2] = {0.0, 0.0};
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    const double m = rmass ? rmass[i] : mass[type[i]];
+  for_atoms(nullptr, [&](int i) {
+    const double m = atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
     for (int k = 0; k < 3; k++) {
       local[0] += m * (vhalf[i][k] - jump[i][k]) * vhalf[i][k];
       local[1] += m * jump[i][k] * jump[i][k];
     }
-  }
+  });
   MPI_Allreduce(local, cached, 2, MPI_DOUBLE, MPI_SUM, world);
   cached[0] *= 0.5 * force->mvv2e;
   cached[1] *= 0.125 * force->mvv2e;
@@ -1630,52 +1209,40 @@ double FixPEJump::compute_vector(int n)
   return 0.0;
 }
 
-/* ---------------------------------------------------------------------- */
+/* ----------------------------------------------------------------------
+   work arrays for the owned atoms (fsample also for the ghosts if it is
+   split off before the reverse communication), only those the rule needs
+------------------------------------------------------------------------- */
 
 void FixPEJump::grow_work()
 {
-  if (nmax_work >= atom->nmax) return;
-  nmax_work = atom->nmax;
+  const int need = use_copy ? atom->nlocal + atom->nghost : atom->nlocal;
+  if (need <= nmax_work) return;
+  nmax_work = need + need / 16 + 64;
+  const bool sum = (rule->size() > 1) || split_primary || steps->keeps_history() || nested;
+  const bool sample = split_primary || rule->has_end_nodes() || nested;
   memory->destroy(fsum);
   memory->destroy(fsample);
-  memory->destroy(xsave);
-  memory->destroy(fsave);
-  memory->create(fsum, nmax_work, 3, "pe_jump:fsum");
-  memory->create(fsample, nmax_work, 3, "pe_jump:fsample");
-  memory->create(xsave, nmax_work, 3, "pe_jump:xsave");
-  memory->create(fsave, nmax_work, 3, "pe_jump:fsave");
-  if (auto_tol > 0.0) {
-    memory->destroy(fnode);
-    memory->create(fnode, nmax_work, 3, "pe_jump:fnode");
-  }
+  memory->destroy(fnode);
+  if (sum) memory->create(fsum, nmax_work, 3, "pe_jump:fsum");
+  if (sample) memory->create(fsample, nmax_work, 3, "pe_jump:fsample");
+  if (nested) memory->create(fnode, nmax_work, 3, "pe_jump:fnode");
 }
 
-/* ---------------------------------------------------------------------- */
+/* ----------------------------------------------------------------------
+   per-atom state: the table owns it and grows with the owned atoms
+------------------------------------------------------------------------- */
 
-void FixPEJump::grow_arrays(int nmax)
+void FixPEJump::grow_arrays(int /*nmax*/)
 {
-  memory->grow(vhalf, nmax, 3, "pe_jump:vhalf");
-  memory->grow(jump, nmax, 3, "pe_jump:jump");
-  if (rule->has_end_nodes()) memory->grow(fstart, nmax, 3, "pe_jump:fstart");
-  if (adapt || compensate) {
-    memory->grow(fhist1, nmax, 3, "pe_jump:fhist1");
-    memory->grow(fhist2, nmax, 3, "pe_jump:fhist2");
-  }
+  state->ensure(atom->nlocal);
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
 {
-  for (int k = 0; k < 3; k++) {
-    vhalf[j][k] = vhalf[i][k];
-    jump[j][k] = jump[i][k];
-    if (fstart) fstart[j][k] = fstart[i][k];
-    if (fhist1) {
-      fhist1[j][k] = fhist1[i][k];
-      fhist2[j][k] = fhist2[i][k];
-    }
-  }
+  state->copy(i, j);
 }
 
 /* ----------------------------------------------------------------------
@@ -1686,12 +1253,8 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
 
 void FixPEJump::set_arrays(int i)
 {
-  for (int k = 0; k < 3; k++) {
-    vhalf[i][k] = atom->v[i][k];
-    jump[i][k] = 0.0;
-    if (fstart) fstart[i][k] = std::nan("");
-    if (fhist1) fhist1[i][k] = fhist2[i][k] = 0.0;
-  }
+  state->reset(i);
+  for (int k = 0; k < 3; k++) field(VHALF)[i][k] = atom->v[i][k];
   fresh_atoms = 1;
 }
 
@@ -1699,32 +1262,14 @@ void FixPEJump::set_arrays(int i)
 
 int FixPEJump::pack_exchange(int i, double *buf)
 {
-  int m = 0;
-  for (int k = 0; k < 3; k++) buf[m++] = vhalf[i][k];
-  for (int k = 0; k < 3; k++) buf[m++] = jump[i][k];
-  if (fstart)
-    for (int k = 0; k < 3; k++) buf[m++] = fstart[i][k];
-  if (fhist1) {
-    for (int k = 0; k < 3; k++) buf[m++] = fhist1[i][k];
-    for (int k = 0; k < 3; k++) buf[m++] = fhist2[i][k];
-  }
-  return m;
+  return state->pack(i, buf);
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJump::unpack_exchange(int nlocal, double *buf)
 {
-  int m = 0;
-  for (int k = 0; k < 3; k++) vhalf[nlocal][k] = buf[m++];
-  for (int k = 0; k < 3; k++) jump[nlocal][k] = buf[m++];
-  if (fstart)
-    for (int k = 0; k < 3; k++) fstart[nlocal][k] = buf[m++];
-  if (fhist1) {
-    for (int k = 0; k < 3; k++) fhist1[nlocal][k] = buf[m++];
-    for (int k = 0; k < 3; k++) fhist2[nlocal][k] = buf[m++];
-  }
-  return m;
+  return state->unpack(nlocal, buf);
 }
 
 /* ----------------------------------------------------------------------
@@ -1750,8 +1295,7 @@ void FixPEJump::global_state(double *list) const
   list[1] = rule->family();
   list[2] = rule->points();
   list[3] = evals_total;
-  list[4] = hlast;
-  list[5] = hlast2;
+  steps->save(&list[4]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1763,8 +1307,7 @@ void FixPEJump::restart(char *buf)
       (static_cast<int>(list[2]) == rule->points());
   started = (static_cast<int>(list[0]) != 0) && same_rule;
   evals_total = list[3];
-  hlast = list[4];
-  hlast2 = list[5];
+  steps->load(&list[4]);
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "
@@ -1776,9 +1319,9 @@ void FixPEJump::restart(char *buf)
 
 int FixPEJump::pack_restart(int i, double *buf)
 {
-  buf[0] = nstate + 1;
-  pack_exchange(i, &buf[1]);
-  return nstate + 1;
+  buf[0] = state->values() + 1;
+  state->pack(i, &buf[1]);
+  return state->values() + 1;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1788,25 +1331,25 @@ void FixPEJump::unpack_restart(int nlocal, int nth)
   double **extra = atom->extra;
   int m = 0;
   for (int i = 0; i < nth; i++) m += static_cast<int>(extra[nlocal][m]);
-  if (static_cast<int>(extra[nlocal][m]) != nstate + 1) {
+  if (static_cast<int>(extra[nlocal][m]) != state->values() + 1) {
     started = 0;
     return;
   }
-  unpack_exchange(nlocal, &extra[nlocal][m + 1]);
+  state->unpack(nlocal, &extra[nlocal][m + 1]);
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJump::size_restart(int /*nlocal*/)
 {
-  return nstate + 1;
+  return state->values() + 1;
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJump::maxsize_restart()
 {
-  return nstate + 1;
+  return state->values() + 1;
 }
 
 /* ----------------------------------------------------------------------
@@ -1842,8 +1385,7 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
 
 double FixPEJump::memory_usage()
 {
-  double bytes =
-      (double) atom->nmax * 3 * sizeof(double) * (2 + (fstart ? 1 : 0) + (fhist1 ? 2 : 0));
-  bytes += (double) nmax_work * 3 * sizeof(double) * 4;
-  return bytes;
+  const int arrays = (fsum ? 1 : 0) + (fsample ? 1 : 0) + (fnode ? 1 : 0);
+  return state->memory_usage() + nodes->memory_usage() +
+      static_cast<double>(nmax_work) * 3 * sizeof(double) * arrays;
 }

@@ -27,8 +27,15 @@ FixStyle(pe_jump,FixPEJump);
 
 namespace LAMMPS_NS {
 namespace PEJump {
+  class AtomState;
   class ForceSampler;
+  class NestedLobatto;
+  class NodeSampler;
+  class OtherFixes;
   class Quadrature;
+  class StabilityGuard;
+  class StepControl;
+  struct AtomSet;
 }    // namespace PEJump
 
 class FixPEJump : public Fix {
@@ -68,80 +75,64 @@ class FixPEJump : public Fix {
 
  protected:
   enum Init { INIT_KICK, INIT_PAPER };
+  using AtomList = std::vector<int>;
 
   // for derived styles: keywords are parsed from arg[first_keyword] on;
   // the slow/fast style has fixed steps (compensate is off by default) and
   // takes the buffer keyword
   FixPEJump(class LAMMPS *, int, char **, int first_keyword, bool two_clocks);
 
+  // the parts: quadrature rule (or the nested rules of quadrature auto),
+  // force evaluation, node sampling, per-atom state, step control, the
+  // stability guard, and what other fixes do
   PEJump::Quadrature *rule;
+  PEJump::NestedLobatto *nested;
   PEJump::ForceSampler *sampler;
+  PEJump::NodeSampler *nodes;
+  PEJump::AtomState *state;
+  PEJump::StepControl *steps;
+  PEJump::StabilityGuard *guard;
+  PEJump::OtherFixes *others;
+
+  // per-atom state fields: free-flight velocity v^{n+1/2}, jump [v]^n,
+  // and (Lobatto rules) the sampled force at the start node
+  int VHALF, JUMP, FSTART;
+  double **field(int which) const;
+
   int init_style;
   int sample_mask;    // contributions sampled at the quadrature nodes
-
-  // quadrature auto: defect tolerance (energy), steps done with lobatto 3 and 5
-  double auto_tol;
+  double auto_tol;    // quadrature auto: defect tolerance (energy)
   bigint auto_steps[3];
-  double **fnode;    // work: forces at the middle node
+  char *id_pe;                    // compute pe that requests the energy at every step (auto)
+  double vprev;                   // potential energy at the start of the step (auto)
+  double damp_time, damp_rate;    // damp keyword (-1 auto) and 1/damping time
+  int damping;                    // 1 if the parasitic mode is damped now
+  int impulse_local;              // another fix changed a velocity in this step (this rank)
+  int buffer_layers;              // pe_jump/async: layers of slow atoms on the fine clock
 
-  // local indices of owned atoms of the group; nullptr stands for all of them
-  using AtomList = std::vector<int>;
-  const AtomList *node_select;    // if set: only these atoms move to the nodes
-  char *id_pe;                    // compute pe that requests the energy at every step
-  class Compute *c_pe;
-  double vprev;    // potential energy at the start of the step
-
-  // adaptive time step: (1/8)|M^-1/2 [p]|^2 <= eps * energy scale
-  int adapt;
-  double adapt_eps, adapt_dtmin, adapt_dtmax;
-  double energy_scale;          // |pseudo-energy| at the start of the run
-  double **fhist1, **fhist2;    // per atom: averaged forces of the last two steps
-  double hlast, hlast2;         // sizes of the last two steps, 0 if there are none
-  int compensate;               // compensate the parasitic jump of step-size changes
-  double damp_time;             // damp keyword: parasitic damping time, -1 auto
-  double damp_rate;             // 1/damping time
-  int damping;                  // 1 if the parasitic mode is damped now
-  int impulse_local;            // another fix changed a velocity in this step (this rank)
-  int buffer_layers;            // pe_jump/async: layers of slow atoms moved to the fine clock
-
-  // per-atom state, velocity units: free-flight velocity v^{n+1/2},
-  // jump [v]^n, and (Lobatto rules) the sampled force at the start node
-  double **vhalf, **jump, **fstart;
-  int nstate;                            // values per atom in exchange and restart buffers
-  std::string stability_hint;            // advice in the instability error
-  std::vector<double> inverse_mass;      // per atom type
-  std::vector<int> end_of_step_every;    // intervals of the other fixes with end_of_step()
-
-  // per-step work arrays (not migrated)
+  // per-step work arrays (not migrated), only those the rule needs
   double **fsum;       // quadrature sum of the forces over the step
   double **fsample;    // sampled force at the primary node (when split)
-  double **xsave;      // positions at the primary node
-  double **fsave;      // total forces at the primary node
+  double **fnode;      // quadrature auto: forces at the middle node
   int nmax_work;
+  const AtomList *node_select;    // if set: only these atoms move to the nodes
 
-  int started;                  // 1 once the two-step state is valid
-  int reinit_pending;           // redo the initial kick when all fix forces are in
-  int split_primary;            // 1 if forces not integrated by the rule act as impulses
-  int fresh_atoms;              // 1 if atoms were created since the last setup (this rank)
-  int others_bits;              // group bits of other time integrators
-  int velocity_hooks;           // hooks of other fixes that may change velocities
-  double advance_pending;       // free flight left for after this step's list build
-  std::vector<Fix *> adders;    // other fixes that add forces (impulses)
-  int use_copy;                 // split by copying f before reverse communication
+  int started;               // 1 once the two-step state is valid
+  int reinit_pending;        // redo the initial kick when all fix forces are in
+  int split_primary;         // 1 if forces not integrated by the rule act as impulses
+  int use_copy;              // split by copying f before reverse communication
+  int fresh_atoms;           // 1 if atoms were created since the last setup (this rank)
+  double advance_pending;    // free flight left for after this step's list build
   int eflag_step, vflag_step;
-  double h_step;      // step size used in the current step
-  double stats[2];    // largest |v^{n+1/2}|^2, |[v]^n|^2 of the local atoms after the last step
-  int stats_valid;    // stats describe the current state
-  double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
+  double h_step;    // step size used in the current step
 
   double evals_step, evals_total;    // force evaluations (units of full ones)
   bigint cached_step;
   double cached[2];    // pseudo-kinetic and jump energy at cached_step
 
+  PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
   virtual void start_scheme(const char *, bool);
-  void sort_other_fixes();
   void agree_on_started();
-  void check_other_integrators();
   virtual void node_impulses();
   void refresh_start_nodes();
   double inverse_mass_of(int) const;
@@ -149,22 +140,12 @@ class FixPEJump : public Fix {
   void project_sampled();
   void quadrature_sum();
   void auto_quadrature_sum();
-  void evaluate_at(double shift, const AtomList *only);
-  void save_positions(const AtomList *only);
-  void restore_positions(const AtomList *only);
-  void sample_nodes(int first, int skip, double scale, double offset, const AtomList *only,
-                    double **acc, double **fend);
-  void check_excursion(double lo, double hi, const int *select = nullptr, double lo2 = 0.0,
-                       double hi2 = 0.0, double hsel = 0.0, const double *lag = nullptr);
+  double auto_defect(double dv) const;
+  void check_excursion(double lo, double hi);
   void finish_check(const double *local);
-  double node_excursion(double **xhold, double lo, double hi, const AtomList *only) const;
   void tally_at_node();
   bool rebuild_due() const;
-  bool step_observed() const;
   bool tally_step() const;
-  void choose_next_dt();
-  void set_timestep(double);
-  void compensate_step_change();
   void energies();
   void grow_work();
   int detect_velocity_change();
@@ -214,13 +195,6 @@ class FixPEJump : public Fix {
   virtual std::string instability_advice() const;    // what to do when unstable
   virtual bool can_reverse() const;                  // a velocity reversal can be continued
   static constexpr int NGLOBAL = 6;                  // values of the global restart state
-  // hooks of other fixes where they may change velocities: between two
-  // steps of this fix, or inside a step
-  static constexpr int BETWEEN_STEPS =
-      FixConst::INITIAL_INTEGRATE | FixConst::FINAL_INTEGRATE | FixConst::END_OF_STEP;
-  static constexpr int INSIDE_STEP = FixConst::POST_INTEGRATE | FixConst::PRE_EXCHANGE |
-      FixConst::PRE_NEIGHBOR | FixConst::POST_NEIGHBOR | FixConst::PRE_FORCE |
-      FixConst::PRE_REVERSE | FixConst::POST_FORCE;
 };
 
 }    // namespace LAMMPS_NS

@@ -38,9 +38,14 @@
 #include "neighbor.h"
 #include "output.h"
 #include "pair.h"
+#include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_interaction_split.h"
+#include "pe_jump_node_sampler.h"
+#include "pe_jump_other_fixes.h"
 #include "pe_jump_quadrature.h"
+#include "pe_jump_stability_guard.h"
+#include "pe_jump_step_control.h"
 #include "update.h"
 
 #include <cmath>
@@ -48,19 +53,22 @@
 
 using namespace LAMMPS_NS;
 using namespace FixConst;
+using PEJump::AtomState;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
+using PEJump::NodeSampler;
+using PEJump::OtherFixes;
+using PEJump::StabilityGuard;
 
-static constexpr int NASYNC_GLOBAL = 6;      // K, fine step index, elapsed time, buffer, clock
-static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value in reductions
+static constexpr int NASYNC_GLOBAL = 6;    // K, fine step index, elapsed time, buffer, clock
 
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, true), nfine(1), finebit(0), clockbit(0), fine_index(0),
     elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0),
-    velocity_changed(0), saved_buffer(-1), split(nullptr), facc(nullptr), fstart_coarse(nullptr),
-    klass(nullptr), tpos(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
+    velocity_changed(0), saved_buffer(-1), split(nullptr), tnow(0.0), fcoarse(nullptr),
+    nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -70,13 +78,13 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   finebit = group->bitmask[ifast];
   fast_group = arg[4];
 
-  if (adapt)
+  if (steps->adapts())
     error->all(FLERR,
                "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
                "steps are fixed (use fix pe_jump for adaptive steps)");
-  if (auto_tol > 0.0)
+  if (nested)
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
-  if (compensate)
+  if (steps->keeps_history())
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
   if (damp_time >= 0.0)
     error->all(FLERR, "Fix pe_jump/async does not support the damp keyword yet");
@@ -98,8 +106,10 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   size_peratom_cols = 0;
   peratom_freq = 1;
 
-  nstate += 5 + (rule->has_end_nodes() ? 3 : 0);
-  FixPEJumpAsync::grow_arrays(atom->nmax);
+  FACC = state->add("facc", 3, 0.0);
+  FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
+  KLASS = state->add("klass", 1, OUTSIDE);
+  TPOS = state->add("tpos", 1, CURRENT);
   for (int i = 0; i < atom->nlocal; i++) FixPEJumpAsync::set_arrays(i);
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -121,10 +131,6 @@ void FixPEJumpAsync::post_constructor()
 FixPEJumpAsync::~FixPEJumpAsync()
 {
   delete split;
-  memory->destroy(facc);
-  memory->destroy(fstart_coarse);
-  memory->destroy(klass);
-  memory->destroy(tpos);
   memory->destroy(fcoarse);
 }
 
@@ -203,6 +209,7 @@ void FixPEJumpAsync::init()
     clockbit = group->bitmask[iclock];
   }
   split->set_fine_bit(clockbit);
+  maxexchange = state->values();
 
   // the fast group must be a non-empty part of the fix group
 
@@ -279,8 +286,9 @@ void FixPEJumpAsync::assign_buffer()
 
 void FixPEJumpAsync::node_impulses()
 {
-  if (!(velocity_hooks & (BETWEEN_STEPS | INSIDE_STEP))) return;
-  if (velocity_hooks & BETWEEN_STEPS) note_velocity_changes(fine_index ? &fast_atoms : nullptr);
+  if (!others->may_change_velocities(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) return;
+  if (others->may_change_velocities(OtherFixes::BETWEEN_STEPS))
+    note_velocity_changes(fine_index ? &fast_atoms : nullptr);
   if (fine_index) return;
   int any = 0;
   MPI_Allreduce(&velocity_changed, &any, 1, MPI_INT, MPI_MAX, world);
@@ -297,6 +305,8 @@ void FixPEJumpAsync::node_impulses()
 void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
 {
   double **v = atom->v;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
   const auto check = [&](int i) {
     for (int k = 0; k < 3; k++)
       if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) velocity_changed = 1;
@@ -349,6 +359,7 @@ void FixPEJumpAsync::find_moving()
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
+  double *tpos = state->val(TPOS);
   moving.resize(nlocal);
   moving_atoms.clear();
   fast_atoms.clear();
@@ -381,6 +392,8 @@ void FixPEJumpAsync::find_moving()
 void FixPEJumpAsync::slow_magnitudes()
 {
   stats_slow[0] = stats_slow[1] = 0.0;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
   for (const int i : slow_atoms) {
     double vv = 0.0, jj = 0.0;
     for (int k = 0; k < 3; k++) {
@@ -397,6 +410,8 @@ void FixPEJumpAsync::slow_magnitudes()
 void FixPEJumpAsync::catch_up(int i)
 {
   double **x = atom->x;
+  double **vhalf = field(VHALF);
+  double *tpos = state->val(TPOS);
   const double lag = tnow - tpos[i];
   if (lag != 0.0)
     for (int k = 0; k < 3; k++) x[i][k] += lag * vhalf[i][k];
@@ -408,6 +423,7 @@ void FixPEJumpAsync::catch_up(int i)
 void FixPEJumpAsync::catch_up_all()
 {
   const int nlocal = atom->nlocal;
+  const double *tpos = state->val(TPOS);
   for (int i = 0; i < nlocal; i++)
     if (tpos[i] != CURRENT) catch_up(i);
 }
@@ -421,6 +437,8 @@ void FixPEJumpAsync::catch_up_all()
 void FixPEJumpAsync::advance(double t)
 {
   double **x = atom->x;
+  double **vhalf = field(VHALF);
+  double *tpos = state->val(TPOS);
   tnow = elapsed + t;
   if (fine_index + 1 < nfine) {
     for (const int i : moving_atoms) {
@@ -449,6 +467,7 @@ void FixPEJumpAsync::setup(int vflag)
   agree_on_started();
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
+  state->ensure(atom->nlocal);
   if ((buffer_layers > 0) && (!started || (buffer_layers != saved_buffer))) assign_buffer();
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
@@ -480,6 +499,8 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   if (with_start) {
     fine_index = 0;
     elapsed = tnow = 0.0;
+    double *tpos = state->val(TPOS);
+    double **facc = field(FACC);
     for (int i = 0; i < atom->nlocal; i++) {
       if (tpos[i] != CURRENT) tpos[i] = 0.0;
       for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
@@ -526,10 +547,11 @@ std::string FixPEJumpAsync::instability_advice() const
 void FixPEJumpAsync::store_start_node()
 {
   double **f = atom->f;
+  double **fstart = field(FSTART);
+  double **fstart_coarse = field(FSTART_COARSE);
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  const size_t nbytes = 3 * sizeof(double) * nlocal;
-  if (nlocal) memcpy(&fsave[0][0], &f[0][0], nbytes);
+  NodeSampler::Keep keep(*nodes);
 
   split->activate(InteractionSplit::FINE);
   sampler->compute(ForceSampler::ALL, 0, 0);
@@ -543,7 +565,6 @@ void FixPEJumpAsync::store_start_node()
     for (int k = 0; k < 3; k++) fstart_coarse[i][k] = split->coarse(i) ? f[i][k] : 0.0;
 
   split->restore();
-  if (nlocal) memcpy(&f[0][0], &fsave[0][0], nbytes);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -601,28 +622,40 @@ void FixPEJumpAsync::check_lists()
   const double c_hi = tally ? 1.0 : rule->node.back();
   const double coarse_step = nfine * h_step;
   const bool coarse_end = (fine_index + 1 >= nfine);
-  if (!coarse_end && stats_valid) {
+  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+  double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  if (!coarse_end && guard->has_stats()) {
     // the magnitudes were taken per clock by final_integrate(); the fine
     // nodes' excursions matter only for the atoms that move to them, and
     // not at all if the Verlet loop checks the only node
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
-    double local[5] = {0.0, MAX(hf2 * stats[0], hs2 * stats_slow[0]),
-                       MAX(hf2 * stats[1], hs2 * stats_slow[1]), MAX(stats[1], stats_slow[1]),
-                       MAX(stats[0], stats_slow[0])};
-    double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+    local[1] = MAX(hf2 * guard->speed2(), hs2 * stats_slow[0]);
+    local[2] = MAX(hf2 * guard->jump2(), hs2 * stats_slow[1]);
+    local[3] = MAX(guard->jump2(), stats_slow[1]);
+    local[4] = MAX(guard->speed2(), stats_slow[0]);
     if (xhold && (tally || (rule->size() > 1)))
-      local[0] = node_excursion(xhold, c_lo * h_step, c_hi * h_step, &moving_atoms);
+      local[0] = guard->excursion(group_atoms(&moving_atoms), field(VHALF), xhold, c_lo * h_step,
+                                  c_hi * h_step);
     finish_check(local);
-  } else if (!coarse_end) {
-    check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), 0.0, 0.0, coarse_step);
-  } else {
+    return;
+  }
+  const double cp = rule->node[rule->primary()] * h_step;
+  StabilityGuard::Nodes at{h_step, c_lo * h_step, c_hi * h_step, cp,     slow.data(),
+                           0.0,    0.0,           coarse_step,   nullptr};
+  if (coarse_end) {
+    // the coarse nodes q_S^n + c H v_S of the slow atoms, measured from
+    // their current positions q_S^n + elapsed v_S (less their lag)
     const double span = elapsed + h_step;
+    const double *tpos = state->val(TPOS);
     const int nlocal = atom->nlocal;
     lag.resize(nlocal);
     for (int i = 0; i < nlocal; i++) lag[i] = (tpos[i] == CURRENT) ? 0.0 : elapsed - tpos[i];
-    check_excursion(c_lo * h_step, c_hi * h_step, slow.data(), c_lo * span - elapsed,
-                    rule->node.back() * span - elapsed, coarse_step, lag.data());
+    at.lo2 = c_lo * span - elapsed;
+    at.hi2 = rule->node.back() * span - elapsed;
+    at.lag = lag.data();
   }
+  guard->measure(group_atoms(), field(VHALF), field(JUMP), xhold, at, local);
+  finish_check(local);
 }
 
 /* ----------------------------------------------------------------------
@@ -634,14 +667,17 @@ void FixPEJumpAsync::check_lists()
 void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 {
   const int reuse_start = rule->has_end_nodes();
+  double **fstart_coarse = reuse_start ? field(FSTART_COARSE) : nullptr;
   for (const int i : slow_atoms) {
     for (int k = 0; k < 3; k++)
       fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
   }
   const double at = elapsed + rule->node[rule->primary()] * h_step;
   split->activate(InteractionSplit::COARSE);
-  sample_nodes(reuse_start ? 1 : 0, -1, coarse_step, -at, &slow_atoms, fcoarse,
-               reuse_start ? fstart_coarse : nullptr);
+  const int evaluated =
+      nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, field(VHALF),
+                       group_atoms(&slow_atoms), sample_mask, fcoarse, fstart_coarse);
+  evals_step += evaluated * node_cost();
   split->restore();
 }
 
@@ -654,7 +690,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 
 void FixPEJumpAsync::final_integrate()
 {
-  if (velocity_hooks & INSIDE_STEP) note_velocity_changes(&fast_atoms);
+  if (others->may_change_velocities(OtherFixes::INSIDE_STEP)) note_velocity_changes(&fast_atoms);
   grow_work();
   if (nmax_coarse < atom->nmax) {
     nmax_coarse = atom->nmax;
@@ -686,9 +722,12 @@ void FixPEJumpAsync::final_integrate()
   const int keep_start = rule->has_end_nodes();
 
   const bool other_forces = (modify->n_post_force_any > 0);
-  const double *rmass = atom->rmass;
-  const int *type = atom->type;
   double **v = atom->v;
+  double **vhalf = field(VHALF);
+  double **jump = field(JUMP);
+  double **fstart = keep_start ? field(FSTART) : nullptr;
+  double **facc = field(FACC);
+  double *tpos = state->val(TPOS);
   const double kick = 2.0 * h_step * force->ftm2v;
   double **favg = direct ? f : fsum;
   // per clock: largest |v|^2, |[v]|^2; the slow atoms' change only at
@@ -704,7 +743,7 @@ void FixPEJumpAsync::final_integrate()
       // interior slow atoms have no fine interactions: only other fixes' forces
       const double *fa = moving[i] ? favg[i] : f[i];
       if (!slow[i]) {
-        const double dtfm = kick * (rmass ? 1.0 / rmass[i] : inverse_mass[type[i]]);
+        const double dtfm = kick * inverse_mass_of(i);
         two_step_jump(dtfm, fa, jump[i], vhalf[i], v[i]);
       } else {
         double fslow[3];
@@ -722,7 +761,8 @@ void FixPEJumpAsync::final_integrate()
     };
     for (int i = 0; i < nlocal; i++)
       if (mask[i] & groupbit) coarse_node(i);
-    for (int k = 0; k < 2; k++) stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : BLOWUP;
+    for (int k = 0; k < 2; k++)
+      stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : StabilityGuard::BLOWUP;
   } else {
     // the atoms on the fine clock take a synchronous step; of the slow atoms
     // those in a fine interaction move on, and they (and the others, if
@@ -738,13 +778,12 @@ void FixPEJumpAsync::final_integrate()
       }
     }
   }
-  for (int k = 0; k < 2; k++) stats[k] = std::isfinite(mag[0][k]) ? mag[0][k] : BLOWUP;
-  stats_valid = 1;
+  guard->set_stats(mag[0][0], mag[0][1]);
 
   // interior slow atoms catch up wherever their positions are looked at:
   // output, other fixes at the end of the step, the end of the run
   tnow = coarse_end ? 0.0 : coarse_step;
-  if (!coarse_end && step_observed()) catch_up_all();
+  if (!coarse_end && others->step_observed()) catch_up_all();
 
   split->activate(InteractionSplit::ALL);
   tally_at_node();
@@ -757,7 +796,7 @@ void FixPEJumpAsync::final_integrate()
     elapsed = 0.0;
     // the labels are output only: take them where something looks, when
     // tally_at_node() has brought the ghosts to the node
-    if (eflag_step || vflag_step || step_observed()) label_classes();
+    if (eflag_step || vflag_step || others->step_observed()) label_classes();
   } else {
     ++fine_index;
     elapsed = coarse_step;
@@ -778,6 +817,7 @@ void FixPEJumpAsync::label_classes()
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
+  double *klass = state->val(KLASS);
   double local[3] = {0.0, 0.0, 0.0};
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit))
@@ -863,16 +903,22 @@ double FixPEJumpAsync::compute_vector(int n)
   return FixPEJump::compute_vector(n);
 }
 
+/* ----------------------------------------------------------------------
+   the per-atom output (the classes) is a field of the state table, which
+   may move when it grows
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::show_classes()
+{
+  vector_atom = state->val(KLASS);
+}
+
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::grow_arrays(int nmax)
 {
   FixPEJump::grow_arrays(nmax);
-  memory->grow(facc, nmax, 3, "pe_jump/async:facc");
-  if (rule->has_end_nodes()) memory->grow(fstart_coarse, nmax, 3, "pe_jump/async:fstart_coarse");
-  memory->grow(klass, nmax, "pe_jump/async:klass");
-  memory->grow(tpos, nmax, "pe_jump/async:tpos");
-  vector_atom = klass;
+  show_classes();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -880,53 +926,32 @@ void FixPEJumpAsync::grow_arrays(int nmax)
 void FixPEJumpAsync::copy_arrays(int i, int j, int delflag)
 {
   FixPEJump::copy_arrays(i, j, delflag);
-  for (int k = 0; k < 3; k++) {
-    facc[j][k] = facc[i][k];
-    if (fstart_coarse) fstart_coarse[j][k] = fstart_coarse[i][k];
-  }
-  klass[j] = klass[i];
-  tpos[j] = tpos[i];
-}
-
-/* ----------------------------------------------------------------------
-   an atom created during the simulation
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::set_arrays(int i)
-{
-  FixPEJump::set_arrays(i);
-  for (int k = 0; k < 3; k++) {
-    facc[i][k] = 0.0;
-    if (fstart_coarse) fstart_coarse[i][k] = 0.0;
-  }
-  klass[i] = OUTSIDE;
-  tpos[i] = CURRENT;
+  show_classes();
 }
 
 /* ---------------------------------------------------------------------- */
 
-int FixPEJumpAsync::pack_exchange(int i, double *buf)
+void FixPEJumpAsync::set_arrays(int i)
 {
-  int m = FixPEJump::pack_exchange(i, buf);
-  for (int k = 0; k < 3; k++) buf[m++] = facc[i][k];
-  if (fstart_coarse)
-    for (int k = 0; k < 3; k++) buf[m++] = fstart_coarse[i][k];
-  buf[m++] = klass[i];
-  buf[m++] = tpos[i];
-  return m;
+  FixPEJump::set_arrays(i);
+  show_classes();
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJumpAsync::unpack_exchange(int nlocal, double *buf)
 {
-  int m = FixPEJump::unpack_exchange(nlocal, buf);
-  for (int k = 0; k < 3; k++) facc[nlocal][k] = buf[m++];
-  if (fstart_coarse)
-    for (int k = 0; k < 3; k++) fstart_coarse[nlocal][k] = buf[m++];
-  klass[nlocal] = buf[m++];
-  tpos[nlocal] = buf[m++];
+  const int m = FixPEJump::unpack_exchange(nlocal, buf);
+  show_classes();
   return m;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::unpack_restart(int nlocal, int nth)
+{
+  FixPEJump::unpack_restart(nlocal, nth);
+  show_classes();
 }
 
 /* ----------------------------------------------------------------------
@@ -1014,8 +1039,5 @@ void FixPEJumpAsync::check_clocks()
 
 double FixPEJumpAsync::memory_usage()
 {
-  double bytes = FixPEJump::memory_usage();
-  bytes += (double) atom->nmax * sizeof(double) * (3 + (fstart_coarse ? 3 : 0) + 2);
-  bytes += (double) nmax_coarse * 3 * sizeof(double);
-  return bytes;
+  return FixPEJump::memory_usage() + static_cast<double>(nmax_coarse) * 3 * sizeof(double);
 }

@@ -51,8 +51,8 @@ class FixPEJumpAsync : public FixPEJump {
   void grow_arrays(int) override;
   void copy_arrays(int, int, int) override;
   void set_arrays(int) override;
-  int pack_exchange(int, double *) override;
   int unpack_exchange(int, double *) override;
+  void unpack_restart(int, int) override;
   void write_restart(FILE *) override;
   void restart(char *) override;
   int pack_forward_comm(int, int *, double *, int, int *) override;
@@ -81,18 +81,16 @@ class FixPEJumpAsync : public FixPEJump {
 
   PEJump::InteractionSplit *split;
 
-  // per-atom state: the quadrature sum of the forces on slow atoms over the
-  // fine steps done in this coarse step (force x time), (Lobatto rules) the
-  // slow-interaction force at the coarse start node, and the class
-  double **facc, **fstart_coarse;
-  double *klass;
-  // slow atoms that take part in no fine interaction (interior ones) do not
-  // move on fine steps but catch up with their free flight at the coarse
-  // node (or when they join a fine interaction, or are looked at). tpos:
-  // per atom, the time within the coarse step its position belongs to, or
-  // CURRENT if it moves with the fine steps; tnow: the time within the coarse
-  // step of the atoms that move
-  double *tpos;
+  // per-atom state fields: the quadrature sum of the forces on slow atoms
+  // over the fine steps done in this coarse step (force x time), (Lobatto
+  // rules) the slow-interaction force at the coarse start node, the class,
+  // and tpos: the time within the coarse step an atom's position belongs
+  // to, or CURRENT if it moves with the fine steps. Slow atoms that take
+  // part in no fine interaction (interior ones) do not move on fine steps
+  // but catch up with their free flight at the coarse node (or when they
+  // join a fine interaction, or are looked at). tnow: the time within the
+  // coarse step of the atoms that move
+  int FACC, FSTART_COARSE, KLASS, TPOS;
   double tnow;
   static constexpr double CURRENT = -1.0;
 
@@ -126,6 +124,7 @@ class FixPEJumpAsync : public FixPEJump {
   void find_moving();
   void slow_magnitudes();
   void catch_up(int i);
+  void show_classes();    // vector_atom follows the state table
   void catch_up_all();
   void coarse_quadrature_sum(double coarse_step);
   void label_classes();

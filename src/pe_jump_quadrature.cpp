@@ -112,3 +112,30 @@ std::string Quadrature::name() const
   if (fam == LEGENDRE && npts == 1) return "midpoint";
   return std::string(fam == LEGENDRE ? "legendre " : "lobatto ") + std::to_string(npts);
 }
+
+/* ---------------------------------------------------------------------- */
+
+NestedLobatto::NestedLobatto()
+{
+  for (const int n : {2, 3, 5}) rules.emplace_back(Quadrature::LOBATTO, n);
+  const std::vector<double> &all = finest().node;
+  for (const auto &rule : rules) {
+    std::vector<int> where;
+    for (const double c : rule.node) {
+      int k = 0;
+      while (std::fabs(all[k] - c) > 1.0e-14) ++k;
+      where.push_back(k);
+    }
+    index.push_back(where);
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool NestedLobatto::added(int level, int j) const
+{
+  if (level == 0) return true;
+  for (const int k : index[level - 1])
+    if (k == index[level][j]) return false;
+  return true;
+}

@@ -58,6 +58,30 @@ namespace PEJump {
     int npts;
   };
 
+  // quadrature auto: the nested Gauss-Lobatto rules with 2, 3 and 5 points.
+  // The nodes of each rule are among those of the next, so a step that
+  // needs a finer rule evaluates only the nodes it adds; every node is
+  // named by its index in the finest rule.
+
+  class NestedLobatto {
+   public:
+    NestedLobatto();
+
+    int levels() const { return static_cast<int>(rules.size()); }
+    const Quadrature &rule(int level) const { return rules[level]; }
+    const Quadrature &finest() const { return rules.back(); }
+
+    // index in the finest rule of node j of the rule of this level
+    int finest_index(int level, int j) const { return index[level][j]; }
+
+    // true if node j of this level is not a node of the level before
+    bool added(int level, int j) const;
+
+   private:
+    std::vector<Quadrature> rules;
+    std::vector<std::vector<int>> index;
+  };
+
 }    // namespace PEJump
 }    // namespace LAMMPS_NS
 

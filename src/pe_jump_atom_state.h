@@ -1,0 +1,67 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_ATOM_STATE_H
+#define LMP_PE_JUMP_ATOM_STATE_H
+
+#include "pointers.h"
+
+#include <string>
+#include <vector>
+
+namespace LAMMPS_NS {
+namespace PEJump {
+
+  // The per-atom state of a fix as one table: each field (a 3-vector or a
+  // scalar per atom) is declared once with the value a new atom gets, and
+  // the table grows, copies, packs (exchange and restart) and counts the
+  // memory of all of them. Only owned atoms have state, so the table grows
+  // with the number of owned atoms (ensure()), not with atom->nmax.
+
+  class AtomState : protected Pointers {
+   public:
+    explicit AtomState(class LAMMPS *);
+    ~AtomState() override;
+
+    // a field of width 1 or 3 (values per atom); new atoms get init
+    int add(const std::string &name, int width, double init);
+    double **vec(int field) const { return fields[field].vec; }
+    double *val(int field) const { return fields[field].val; }
+
+    void swap(int field1, int field2);    // exchange the values of two fields of one width
+    void ensure(int n);                   // room for atoms 0 .. n-1 (new room holds init values)
+    void copy(int i, int j);
+    void reset(int i);    // the values of a new atom
+    int pack(int i, double *buf) const;
+    int unpack(int i, const double *buf);
+    int values() const;    // values per atom in pack() and unpack()
+    double memory_usage() const;
+
+   private:
+    struct Field {
+      std::string name;
+      int width;
+      double init;
+      double **vec;
+      double *val;
+    };
+    std::vector<Field> fields;
+    int capacity;
+    void grow(Field &, int from, int to);
+    static void fill(Field &, int i);
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif

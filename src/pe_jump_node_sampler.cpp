@@ -1,0 +1,137 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#include "pe_jump_node_sampler.h"
+
+#include "atom.h"
+#include "error.h"
+#include "memory.h"
+#include "pe_jump_force_sampler.h"
+#include "pe_jump_quadrature.h"
+
+#include <cstring>
+
+using namespace LAMMPS_NS;
+using namespace LAMMPS_NS::PEJump;
+
+/* ---------------------------------------------------------------------- */
+
+NodeSampler::NodeSampler(LAMMPS *lmp, ForceSampler *forces) :
+    Pointers(lmp), sampler(forces), xkept(nullptr), fkept(nullptr), nkept(0), keeping(false)
+{
+}
+
+/* ---------------------------------------------------------------------- */
+
+NodeSampler::~NodeSampler()
+{
+  memory->destroy(xkept);
+  memory->destroy(fkept);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void NodeSampler::make_room()
+{
+  if (atom->nlocal <= nkept) return;
+  nkept = atom->nlocal + atom->nlocal / 16 + 64;
+  memory->destroy(xkept);
+  memory->destroy(fkept);
+  memory->create(xkept, nkept, 3, "pe_jump:xkept");
+  memory->create(fkept, nkept, 3, "pe_jump:fkept");
+}
+
+/* ----------------------------------------------------------------------
+   keep the forces of the owned atoms, and the positions of all owned atoms
+   or of those listed. The ghosts are not kept: the forward communication
+   of the next force evaluation brings them up to date.
+------------------------------------------------------------------------- */
+
+NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomList *atoms) :
+    nodes(sampler), which(positions), list(atoms)
+{
+  if (nodes.keeping) nodes.error->one(FLERR, "Fix pe_jump: nested NodeSampler::Keep (bug)");
+  nodes.keeping = true;
+  nodes.make_room();
+  const size_t nbytes = 3 * sizeof(double) * nodes.atom->nlocal;
+  if (!nbytes) return;
+  memcpy(&nodes.fkept[0][0], &nodes.atom->f[0][0], nbytes);
+  double **x = nodes.atom->x;
+  if (which == ALL_OWNED) memcpy(&nodes.xkept[0][0], &x[0][0], nbytes);
+  if (which == LISTED)
+    for (const int i : *list)
+      for (int k = 0; k < 3; k++) nodes.xkept[i][k] = x[i][k];
+}
+
+/* ---------------------------------------------------------------------- */
+
+NodeSampler::Keep::~Keep()
+{
+  nodes.keeping = false;
+  const size_t nbytes = 3 * sizeof(double) * nodes.atom->nlocal;
+  if (!nbytes) return;
+  double **x = nodes.atom->x;
+  if (which == ALL_OWNED) memcpy(&x[0][0], &nodes.xkept[0][0], nbytes);
+  if (which == LISTED)
+    for (const int i : *list)
+      for (int k = 0; k < 3; k++) x[i][k] = nodes.xkept[i][k];
+  memcpy(&nodes.atom->f[0][0], &nodes.fkept[0][0], nbytes);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void NodeSampler::evaluate_at(double shift, double **v, const AtomSet &set, int mask)
+{
+  double **x = atom->x;
+  const auto move = [&](int i) {
+    x[i][0] = xkept[i][0] + shift * v[i][0];
+    x[i][1] = xkept[i][1] + shift * v[i][1];
+    x[i][2] = xkept[i][2] + shift * v[i][2];
+  };
+  set.each(atom->mask, atom->nlocal, move);
+  sampler->compute(mask, 0, 0);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double scale, double offset,
+                           double **v, const AtomSet &set, int mask, double **acc, double **fend)
+{
+  Keep keep(*this, set.list ? LISTED : ALL_OWNED, set.list);
+  double **f = atom->f;
+  const int last = rule.size() - 1;
+  int evaluated = 0;
+  for (int node = first; node <= last; node++) {
+    if (node == skip) continue;
+    evaluate_at(scale * rule.node[node] + offset, v, set, mask);
+    ++evaluated;
+    const double w = rule.weight[node];
+    const bool at_end = fend && (node == last);
+    const auto add = [&](int i) {
+      acc[i][0] += w * f[i][0];
+      acc[i][1] += w * f[i][1];
+      acc[i][2] += w * f[i][2];
+      if (at_end)
+        for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
+    };
+    set.each(atom->mask, atom->nlocal, add);
+  }
+  return evaluated;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double NodeSampler::memory_usage() const
+{
+  return 2.0 * nkept * 3 * sizeof(double);
+}

@@ -1,0 +1,94 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_NODE_SAMPLER_H
+#define LMP_PE_JUMP_NODE_SAMPLER_H
+
+#include "pointers.h"
+
+#include <vector>
+
+namespace LAMMPS_NS {
+namespace PEJump {
+  class ForceSampler;
+  class Quadrature;
+
+  using AtomList = std::vector<int>;
+
+  // The owned atoms of a fix group, or a list of them (local indices)
+  struct AtomSet {
+    int groupbit;
+    const AtomList *list;
+
+    // apply one(i) to the atoms of the set; mask and nlocal of class Atom
+    template <typename Function> void each(const int *mask, int nlocal, Function &&one) const
+    {
+      if (list) {
+        for (const int i : *list) one(i);
+        return;
+      }
+      for (int i = 0; i < nlocal; i++)
+        if (mask[i] & groupbit) one(i);
+    }
+  };
+
+  // Forces at the quadrature nodes of a step. While nodes are sampled, the
+  // forces of the MD step (and the positions of the atoms that move to the
+  // nodes) are kept aside by a Keep object and put back when it goes out of
+  // scope. Nodes lie at q = x + t v, x the kept positions.
+
+  class NodeSampler : protected Pointers {
+   public:
+    NodeSampler(class LAMMPS *, ForceSampler *);
+    ~NodeSampler() override;
+
+    enum Positions { FORCES_ONLY, ALL_OWNED, LISTED };
+    class Keep {
+     public:
+      Keep(NodeSampler &, Positions = FORCES_ONLY, const AtomList * = nullptr);
+      ~Keep();
+      Keep(const Keep &) = delete;
+      Keep &operator=(const Keep &) = delete;
+
+     private:
+      NodeSampler &nodes;
+      Positions which;
+      const AtomList *list;
+    };
+
+    // move the atoms of set to x + shift v and compute the contributions in
+    // mask there (forces only); needs a Keep with their positions
+    void evaluate_at(double shift, double **v, const AtomSet &set, int mask);
+
+    // acc += sum_k w_k F(q_k) over the nodes k = first .. last of rule but
+    // skip, q_k = x + (scale c_k + offset) v for the atoms of set (the others
+    // stay); fend (if given) gets the forces at the last node. Positions and
+    // forces are put back. Returns the number of nodes evaluated.
+    int sum_nodes(const Quadrature &rule, int first, int skip, double scale, double offset,
+                  double **v, const AtomSet &set, int mask, double **acc, double **fend);
+
+    ForceSampler *forces() const { return sampler; }
+    double memory_usage() const;
+
+   private:
+    ForceSampler *sampler;
+    double **xkept, **fkept;
+    int nkept;    // room for this many owned atoms
+    bool keeping;
+    void make_room();
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif

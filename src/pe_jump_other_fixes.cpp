@@ -1,0 +1,126 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#include "pe_jump_other_fixes.h"
+
+#include "atom.h"
+#include "error.h"
+#include "modify.h"
+#include "neigh_list.h"
+#include "neighbor.h"
+#include "output.h"
+#include "pe_jump_force_sampler.h"
+#include "update.h"
+
+using namespace LAMMPS_NS;
+using namespace LAMMPS_NS::PEJump;
+using namespace FixConst;
+
+/* ---------------------------------------------------------------------- */
+
+OtherFixes::OtherFixes(LAMMPS *lmp, Fix *fix) :
+    Pointers(lmp), self(fix), nadders(0), others_bits(0), hooks(0)
+{
+}
+
+/* ----------------------------------------------------------------------
+   fixes that replace or project forces act at every quadrature node, those
+   that add forces act once per step as impulses. Constraints are refused,
+   other time integrators are remembered for the interaction check
+------------------------------------------------------------------------- */
+
+void OtherFixes::sort(ForceSampler &sampler)
+{
+  std::vector<Fix *> preparations, projections;
+  nadders = others_bits = hooks = 0;
+  end_of_step_every.clear();
+  for (auto *ifix : modify->get_fix_list()) {
+    if (ifix == self) continue;
+    const int mask = ifix->setmask();
+    if (mask & END_OF_STEP) end_of_step_every.push_back(MAX(ifix->nevery, 1));
+    hooks |= mask & (BETWEEN_STEPS | INSIDE_STEP);
+    if (mask & PRE_FORCE) preparations.push_back(ifix);
+    if (ifix->time_integrate) {
+      others_bits |= ifix->groupbit;
+      continue;
+    }
+    if (ifix->dof_flag)
+      error->all(FLERR,
+                 "Fix {} cannot be combined with the constraints of fix {} ({}): they assume the "
+                 "velocity Verlet update of fix nve. Use fix nve, or remove the constraints",
+                 self->style, ifix->id, ifix->style);
+    if (!(mask & POST_FORCE)) continue;
+    if (utils::strmatch(ifix->style, "^setforce") || utils::strmatch(ifix->style, "^aveforce") ||
+        utils::strmatch(ifix->style, "^freeze") || utils::strmatch(ifix->style, "^lineforce") ||
+        utils::strmatch(ifix->style, "^planeforce") || utils::strmatch(ifix->style, "^enforce2d"))
+      projections.push_back(ifix);
+    else
+      ++nadders;
+  }
+  sampler.set_hooks(preparations, projections);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool OtherFixes::step_observed() const
+{
+  const bigint now = update->ntimestep;
+  if ((now == output->next) || (now == update->laststep)) return true;
+  for (const int every : end_of_step_every)
+    if (now % every == 0) return true;
+  return false;
+}
+
+/* ----------------------------------------------------------------------
+   atoms of another time integrator (fix nve, fix rigid, a second fix
+   pe_jump) sit at the end of the step when forces are computed: forces
+   between them and this fix's atoms mix times unless every node of the
+   rule is a step end. Checked at setup and after each list build.
+------------------------------------------------------------------------- */
+
+void OtherFixes::refuse_interactions(const char *rule_name) const
+{
+  if (!others_bits) return;
+  const int groupbit = self->groupbit;
+  const int *mask = atom->mask;
+  const auto cross = [&](int i, int j) {
+    return ((mask[i] & groupbit) && (mask[j] & others_bits)) ||
+        ((mask[i] & others_bits) && (mask[j] & groupbit));
+  };
+  int local = 0;
+  for (int n = 0; (n < neighbor->nlist) && !local; n++) {
+    const NeighList *list = neighbor->lists[n];
+    // lists of pair styles, built at every reneighboring (others may be stale)
+    if (!list || !list->numneigh || list->kokkos || list->occasional ||
+        (list->requestor_type != NeighList::PAIR))
+      continue;
+    for (int ii = 0; (ii < list->inum) && !local; ii++) {
+      const int i = list->ilist[ii];
+      for (int jj = 0; jj < list->numneigh[i]; jj++)
+        if (cross(i, list->firstneigh[i][jj] & NEIGHMASK)) local = 1;
+    }
+  }
+  if (atom->molecular != Atom::ATOMIC)
+    for (int n = 0; (n < neighbor->nbondlist) && !local; n++)
+      if (cross(neighbor->bondlist[n][0], neighbor->bondlist[n][1])) local = 1;
+  int global = 0;
+  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
+  if (global)
+    error->all(FLERR,
+               "Fix {} with quadrature {} evaluates forces inside the step, but atoms of another "
+               "time integrator interact with its atoms at step {}: their positions are those "
+               "of the step end, so the forces between the two sets would mix times. Use "
+               "quadrature lobatto 2 (forces at the step ends only), or integrate all "
+               "interacting atoms with one fix {}",
+               self->style, rule_name, update->ntimestep, self->style);
+}

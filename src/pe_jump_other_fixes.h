@@ -1,0 +1,66 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_OTHER_FIXES_H
+#define LMP_PE_JUMP_OTHER_FIXES_H
+
+#include "fix.h"
+
+#include <vector>
+
+namespace LAMMPS_NS {
+namespace PEJump {
+  class ForceSampler;
+
+  // What the other fixes of a run do to the atoms of this fix: replace or
+  // project forces (at every quadrature node, through the ForceSampler),
+  // add forces (impulses), integrate other atoms, change velocities, or
+  // look at the atoms at the end of a step. Constraints are refused.
+
+  class OtherFixes : protected Pointers {
+   public:
+    OtherFixes(class LAMMPS *, Fix *self);
+
+    // hooks of other fixes where they may change velocities: between two
+    // steps of this fix, or inside a step
+    static constexpr int BETWEEN_STEPS =
+        FixConst::INITIAL_INTEGRATE | FixConst::FINAL_INTEGRATE | FixConst::END_OF_STEP;
+    static constexpr int INSIDE_STEP = FixConst::POST_INTEGRATE | FixConst::PRE_EXCHANGE |
+        FixConst::PRE_NEIGHBOR | FixConst::POST_NEIGHBOR | FixConst::PRE_FORCE |
+        FixConst::PRE_REVERSE | FixConst::POST_FORCE;
+
+    void sort(ForceSampler &);    // at init
+    bool add_forces() const { return nadders > 0; }
+    bool may_change_velocities(int when) const { return (hooks & when) != 0; }
+    bool integrate_others() const { return others_bits != 0; }
+
+    // true if anything looks at the atoms after this step: output, the end
+    // of the run, or a fix acting at the end of this step
+    bool step_observed() const;
+
+    // refuse interactions between this fix's atoms and those of another
+    // time integrator (collective)
+    void refuse_interactions(const char *rule_name) const;
+
+   private:
+    Fix *self;
+    int nadders;        // fixes that add forces
+    int others_bits;    // group bits of the other time integrators
+    int hooks;          // hooks of other fixes that may change velocities
+    std::vector<int> end_of_step_every;
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif

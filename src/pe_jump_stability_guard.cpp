@@ -1,0 +1,126 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#include "pe_jump_stability_guard.h"
+
+#include "atom.h"
+#include "neighbor.h"
+
+#include <cmath>
+
+using namespace LAMMPS_NS;
+using namespace LAMMPS_NS::PEJump;
+
+static constexpr double STOP_GROWTH = 1.0e6;    // jump growth that is always instability
+static constexpr double HINT_GROWTH = 2.0;      // ... that is instability if atoms move far
+
+/* ---------------------------------------------------------------------- */
+
+StabilityGuard::StabilityGuard(LAMMPS *lmp) :
+    Pointers(lmp), stats{0.0, 0.0}, valid(false), jump_ref(0.0), last_growth(0.0)
+{
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StabilityGuard::start_run()
+{
+  valid = false;
+  jump_ref = 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StabilityGuard::set_stats(double vv, double jj)
+{
+  stats[0] = std::isfinite(vv) ? vv : BLOWUP;
+  stats[1] = std::isfinite(jj) ? jj : BLOWUP;
+  valid = true;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StabilityGuard::measure(const AtomSet &set, double **vhalf, double **jump, double **xhold,
+                             const Nodes &at, double *local) const
+{
+  double **x = atom->x;
+  const auto one = [&](int i) {
+    const bool both = at.select && at.select[i];
+    const double h = both ? at.hsel : at.h;
+    const double late = at.lag ? at.lag[i] : 0.0;
+    double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int k = 0; k < 3; k++) {
+      vv += vhalf[i][k] * vhalf[i][k];
+      jj += jump[i][k] * jump[i][k];
+      if (xhold) {
+        const double a = x[i][k] - xhold[i][k];
+        const double ends[4] = {a + at.lo * vhalf[i][k], a + at.hi * vhalf[i][k],
+                                a + (at.lo2 + late) * vhalf[i][k],
+                                a + (at.hi2 + late) * vhalf[i][k]};
+        for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
+      }
+    }
+    double span = h;
+    if (both) span = MAX(span, MAX(fabs(at.lo2 - at.cp), fabs(at.hi2 - at.cp)));
+    double step = span * span * vv, jmp = h * h * jj;
+    if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = vv = jj = BLOWUP;
+    local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
+    local[1] = MAX(local[1], step);
+    local[2] = MAX(local[2], jmp);
+    local[3] = MAX(local[3], jj);
+    local[4] = MAX(local[4], vv);
+  };
+  set.each(atom->mask, atom->nlocal, one);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double StabilityGuard::excursion(const AtomSet &set, double **vhalf, double **xhold, double lo,
+                                 double hi) const
+{
+  double **x = atom->x;
+  double worst = 0.0;
+  const auto one = [&](int i) {
+    double dlo = 0.0, dhi = 0.0;
+    for (int k = 0; k < 3; k++) {
+      const double a = x[i][k] - xhold[i][k];
+      dlo += (a + lo * vhalf[i][k]) * (a + lo * vhalf[i][k]);
+      dhi += (a + hi * vhalf[i][k]) * (a + hi * vhalf[i][k]);
+    }
+    worst = MAX(worst, MAX(dlo, dhi));
+  };
+  set.each(atom->mask, atom->nlocal, one);
+  return worst;
+}
+
+/* ----------------------------------------------------------------------
+   the scheme is unstable if the jumps have grown by more than STOP_GROWTH
+   since the first steps of the run (the first step where anything moves),
+   or by more than HINT_GROWTH while moving atoms (or their jumps) by more
+   than half the skin; a large step that is stable only needs a larger
+   skin. Otherwise a rebuild is due where the nodes leave half the skin.
+------------------------------------------------------------------------- */
+
+StabilityGuard::Verdict StabilityGuard::judge(const double *global)
+{
+  if (jump_ref == 0.0) jump_ref = MAX(global[3], global[4]);
+  last_growth = (jump_ref > 0.0) ? sqrt(global[3] / jump_ref) : 0.0;
+
+  const double half_skin = 0.5 * neighbor->skin;
+  const double limit = (half_skin > 0.0) ? half_skin * half_skin : BLOWUP;
+  const bool large = (global[1] >= limit) || (global[2] >= limit);
+  if ((last_growth >= STOP_GROWTH) || (large && (last_growth >= HINT_GROWTH))) return UNSTABLE;
+  if (global[1] >= limit) return TOO_FAR;
+  if (global[0] > limit) return REBUILD;
+  return FINE;
+}

@@ -1,0 +1,76 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_STABILITY_GUARD_H
+#define LMP_PE_JUMP_STABILITY_GUARD_H
+
+#include "pe_jump_node_sampler.h"
+
+namespace LAMMPS_NS {
+namespace PEJump {
+
+  // Before the atoms move in a step: the nodes where forces will be taken
+  // lie on the segments x + t v^{n+1/2}, t in [lo, hi]. The guard measures
+  // how far they are from the positions of the last neighbor list build
+  // (a rebuild is due beyond half the skin) and tells a time step beyond
+  // the stability limit by the growth of the momentum jumps.
+  //
+  // Measures, per rank then reduced with MAX: excursion^2, step length^2,
+  // jump displacement^2 (h |[v]|)^2, |[v]|^2, |v^{n+1/2}|^2.
+
+  class StabilityGuard : protected Pointers {
+   public:
+    static constexpr int NMEASURES = 5;
+    static constexpr double BLOWUP = 1.0e300;    // stands for a non-finite value
+
+    explicit StabilityGuard(class LAMMPS *);
+
+    void start_run();
+    // the largest |v^{n+1/2}|^2 and |[v]|^2 after a step (speeds of the next)
+    void set_stats(double vv, double jj);
+    void forget_stats() { valid = false; }
+    bool has_stats() const { return valid; }
+    double speed2() const { return stats[0]; }
+    double jump2() const { return stats[1]; }
+
+    // the measures of the atoms of set from their state, for steps of size
+    // h: nodes at t in [lo, hi]; atoms with select[i] != 0 take steps of
+    // size hsel and also visit t in [lo2, hi2] (+ lag[i] if given), cp the
+    // primary node of the step
+    struct Nodes {
+      double h, lo, hi, cp;
+      const int *select;
+      double lo2, hi2, hsel;
+      const double *lag;
+    };
+    void measure(const AtomSet &, double **vhalf, double **jump, double **xhold, const Nodes &,
+                 double *local) const;
+
+    // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
+    double excursion(const AtomSet &, double **vhalf, double **xhold, double lo, double hi) const;
+
+    enum Verdict { FINE, REBUILD, UNSTABLE, TOO_FAR };
+    Verdict judge(const double *global);    // the reduced measures
+    double growth() const { return last_growth; }
+
+   private:
+    double stats[2];
+    bool valid;
+    double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
+    double last_growth;
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif
