@@ -297,13 +297,17 @@ def write_chain_data(path, chains, a=5.0, spacing=9.0):
             "mobile": sum(1 for x in atoms if x[2] != 3)}
 
 
-def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345):
+def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345, soft_as_bonds=False):
     """2d triangular spring lattice (spacing 1, periodic, nx*ny atoms, ny
     even) with a central disk holding a fraction frac of the atoms: the
     stiff inclusion. Springs between two inclusion atoms are bonds (stiff),
     all other nearest-neighbour springs are soft (pair table). Atom types:
     1 outside (slow), 2 inclusion (fast group). Velocities: Gaussian with
-    variance kT (unit masses), zero total momentum; positions on the lattice."""
+    variance kT (unit masses), zero total momentum; positions on the lattice.
+
+    soft_as_bonds=True: the soft springs are bonds too (bond type 1, the
+    stiff ones bond type 2, "2 bond types"), for a lattice without a pair
+    style (bench/cost); the default writes the file as before."""
     assert ny % 2 == 0
     rng = np.random.default_rng(seed)
     h = math.sqrt(3.0) / 2.0
@@ -331,15 +335,17 @@ def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345):
             for (k, l) in nbrs:
                 b = k * ny + l
                 if inc[a] and inc[b]:
-                    bonds.append((a + 1, b + 1))
+                    bonds.append((a + 1, b + 1, 2 if soft_as_bonds else 1))
                 else:
                     soft += 1
+                    if soft_as_bonds:
+                        bonds.append((a + 1, b + 1, 1))
     v = rng.normal(0.0, math.sqrt(kT), size=(n, 2))
     v -= v.mean(axis=0)
     typ = np.where(inc, 2, 1)
     with open(path, "w") as f:
         f.write("PE-JUMP benchmark: triangular spring lattice with a stiff inclusion (bench/benchlib.py)\n\n")
-        f.write(f"{n} atoms\n3 atom types\n{len(bonds)} bonds\n1 bond types\n\n")
+        f.write(f"{n} atoms\n3 atom types\n{len(bonds)} bonds\n{2 if soft_as_bonds else 1} bond types\n\n")
         f.write(f"0 {Lx:.17g} xlo xhi\n0 {Ly:.17g} ylo yhi\n-0.5 0.5 zlo zhi\n\n")
         f.write("Atoms # bond\n\n")
         for a in range(n):
@@ -348,8 +354,8 @@ def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345):
         for a in range(n):
             f.write(f"{a+1} {v[a,0]:.17g} {v[a,1]:.17g} 0.0\n")
         f.write("\nBonds\n\n")
-        for k, (a, b) in enumerate(bonds):
-            f.write(f"{k+1} 1 {a} {b}\n")
+        for k, (a, b, t) in enumerate(bonds):
+            f.write(f"{k+1} {t} {a} {b}\n")
     return {"atoms": n, "inclusion": int(inc.sum()), "bonds": len(bonds), "soft": soft,
             "Lx": Lx, "Ly": Ly}
 
