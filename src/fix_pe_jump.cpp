@@ -35,6 +35,7 @@
 #include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_node_sampler.h"
+#include "pe_jump_options.h"
 #include "pe_jump_other_fixes.h"
 #include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
@@ -72,116 +73,19 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
-  auto family = Quadrature::LEGENDRE;
-  int npoints = 1;
-  init_style = INIT_KICK;
-  sample_mask = ForceSampler::ALL;
-  double adapt_eps = 0.0, adapt_dtmin = 0.0, adapt_dtmax = 0.0;
-  int compensate = -1;    // default: with adapt
-  damp_time = -1.0;
-  buffer_layers = 0;
-  auto_tol = 0.0;
+  opts.parse(lmp, style, narg, arg, first_keyword, two_clocks);
   auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
   id_pe = nullptr;
   vprev = 0.0;
 
-  const std::string fix = std::string("fix ") + style;
-  int iarg = first_keyword;
-  while (iarg < narg) {
-    if (strcmp(arg[iarg], "quadrature") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature", error);
-      const std::string which = arg[iarg + 1];
-      auto_tol = 0.0;    // the last quadrature keyword wins
-      if (which == "midpoint") {
-        family = Quadrature::LEGENDRE;
-        npoints = 1;
-        iarg += 2;
-      } else if (which == "auto") {
-        if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature auto", error);
-        auto_tol = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
-        if (auto_tol <= 0.0) error->all(FLERR, "Fix {} quadrature auto needs TOL > 0", style);
-        family = Quadrature::LOBATTO;
-        npoints = 5;
-        iarg += 3;
-      } else if ((which == "lobatto") || (which == "legendre")) {
-        if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature " + which, error);
-        npoints = utils::inumeric(FLERR, arg[iarg + 2], false, lmp);
-        family = (which == "lobatto") ? Quadrature::LOBATTO : Quadrature::LEGENDRE;
-        const int nmin = (family == Quadrature::LOBATTO) ? 2 : 1;
-        if ((npoints < nmin) || (npoints > Quadrature::MAX_POINTS))
-          error->all(FLERR, "Fix {} quadrature {} needs {} to {} points, got {}", style, which,
-                     nmin, Quadrature::MAX_POINTS, npoints);
-        iarg += 3;
-      } else {
-        error->all(FLERR, "Unknown fix {} quadrature rule: {}", style, which);
-      }
-    } else if (strcmp(arg[iarg], "init") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " init", error);
-      if (strcmp(arg[iarg + 1], "kick") == 0)
-        init_style = INIT_KICK;
-      else if (strcmp(arg[iarg + 1], "paper") == 0)
-        init_style = INIT_PAPER;
-      else
-        error->all(FLERR, "Unknown fix {} init style: {}", style, arg[iarg + 1]);
-      iarg += 2;
-    } else if (strcmp(arg[iarg], "adapt") == 0) {
-      if (iarg + 4 > narg) utils::missing_cmd_args(FLERR, fix + " adapt", error);
-      adapt_eps = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
-      adapt_dtmin = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
-      adapt_dtmax = utils::numeric(FLERR, arg[iarg + 3], false, lmp);
-      if (adapt_eps <= 0.0) error->all(FLERR, "Fix {} adapt eps must be > 0", style);
-      if ((adapt_dtmin <= 0.0) || (adapt_dtmax < adapt_dtmin))
-        error->all(FLERR, "Fix {} adapt needs 0 < dtmin <= dtmax", style);
-      iarg += 4;
-    } else if (strcmp(arg[iarg], "buffer") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " buffer", error);
-      if (!two_clocks)
-        error->all(FLERR,
-                   "Fix {} has a single clock: the buffer keyword belongs to fix pe_jump/async",
-                   style);
-      buffer_layers = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
-      if (buffer_layers < 0) error->all(FLERR, "Fix {} buffer needs N >= 0", style);
-      iarg += 2;
-    } else if (strcmp(arg[iarg], "damp") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " damp", error);
-      if (strcmp(arg[iarg + 1], "auto") == 0) {
-        damp_time = -1.0;
-      } else {
-        damp_time = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
-        if (!(damp_time >= 0.0)) error->all(FLERR, "Fix {} damp needs a time >= 0 or auto", style);
-      }
-      iarg += 2;
-    } else if (strcmp(arg[iarg], "compensate") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " compensate", error);
-      compensate = utils::logical(FLERR, arg[iarg + 1], false, lmp);
-      iarg += 2;
-    } else if (strcmp(arg[iarg], "sample") == 0) {
-      sample_mask = 0;
-      ++iarg;
-      while (iarg < narg) {
-        const int bit = ForceSampler::parse(arg[iarg]);
-        if (!bit) break;
-        sample_mask |= bit;
-        ++iarg;
-      }
-      if (!sample_mask)
-        error->all(FLERR,
-                   "Fix {} sample needs one or more of pair, bond, angle, dihedral, improper, "
-                   "kspace, or all",
-                   style);
-    } else {
-      error->all(FLERR, "Unknown fix {} keyword: {}", style, arg[iarg]);
-    }
-  }
-
-  rule = new Quadrature(family, npoints);
+  rule = new Quadrature(static_cast<Quadrature::Family>(opts.family), opts.npoints);
   sampler = new ForceSampler(lmp);
   nodes = new NodeSampler(lmp, sampler);
   guard = new StabilityGuard(lmp);
   others = new OtherFixes(lmp, this);
 
-  if (auto_tol > 0.0) {
-    if (sample_mask != ForceSampler::ALL)
+  if (opts.auto_tol > 0.0) {
+    if (opts.sample_mask != ForceSampler::ALL)
       error->all(FLERR, "Fix {} quadrature auto samples all force contributions", style);
     id_pe = utils::strdup(std::string(id) + "_pe");
     nested = new NestedLobatto();
@@ -192,8 +96,9 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   VHALF = state->add("vhalf", 3, 0.0);
   JUMP = state->add("jump", 3, 0.0);
   FSTART = rule->has_end_nodes() ? state->add("fstart", 3, std::nan("")) : -1;
-  if (compensate < 0) compensate = (adapt_eps > 0.0) ? 1 : 0;
-  steps = new StepControl(lmp, *state, adapt_eps, adapt_dtmin, adapt_dtmax, compensate != 0);
+  const bool compensate = (opts.compensate < 0) ? (opts.adapt_eps > 0.0) : (opts.compensate != 0);
+  steps =
+      new StepControl(lmp, *state, opts.adapt_eps, opts.adapt_dtmin, opts.adapt_dtmax, compensate);
 
   time_integrate = 1;
   scalar_flag = 1;
@@ -306,8 +211,8 @@ void FixPEJump::init()
   // Gauss-Legendre rule then gets the centre as an extra node
 
   const int present = sampler->present();
-  split_primary = others->add_forces() || ((sample_mask & present) != present);
-  use_copy = split_primary && ((sample_mask & present) == present);
+  split_primary = others->add_forces() || ((opts.sample_mask & present) != present);
+  use_copy = split_primary && ((opts.sample_mask & present) == present);
   const bool centre = split_primary && (rule->family() == Quadrature::LEGENDRE) &&
       (rule->points() % 2 == 0) && !nested;
   if (centre != (rule->size() != rule->points())) {
@@ -317,18 +222,18 @@ void FixPEJump::init()
   }
   // other fixes that add forces or change velocities (thermostats above
   // all) drive the parasitic period-2 mode, which the scheme does not damp:
-  // damp it over damp_time (auto: AUTO_DAMP_STEPS steps, from the start if
+  // damp it over the damp time (auto: AUTO_DAMP_STEPS steps, from the start if
   // fixes add forces, else from the first step where a velocity changed)
   damp_rate = 0.0;
-  if (damp_time > 0.0)
-    damp_rate = 1.0 / damp_time;
-  else if (damp_time < 0.0)
+  if (opts.damp_time > 0.0)
+    damp_rate = 1.0 / opts.damp_time;
+  else if (opts.damp_time < 0.0)
     damp_rate = 1.0 / (AUTO_DAMP_STEPS * update->dt);
-  damping = (damp_time > 0.0) || ((damp_time < 0.0) && others->add_forces());
+  damping = (opts.damp_time > 0.0) || ((opts.damp_time < 0.0) && others->add_forces());
   impulse_local = 0;
   if (id_pe && !modify->get_compute_by_id(id_pe))
     error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
-  if (present && !(sample_mask & present) && (comm->me == 0))
+  if (present && !(opts.sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
 
@@ -372,7 +277,7 @@ void FixPEJump::setup(int /*vflag*/)
   if (!nodes_at_step_ends(*rule)) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pseudo_energy_now());
   if (nested) {
-    vprev = potential_now(sample_mask);
+    vprev = potential_now(opts.sample_mask);
     modify->get_compute_by_id(id_pe)->addstep(update->ntimestep + 1);
   }
 }
@@ -670,8 +575,11 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
   const double beta = damping ? MIN(1.0, damp_rate * fabs(h_step)) : 0.0;
   double vv = mag[0], jj = mag[1];
+  const double *rmass = atom->rmass;
+  const double *mass = atom->mass;
+  const int *type = atom->type;
   const auto one = [&](int i) {
-    const double dtfm = kick * inverse_mass_of(i);
+    const double dtfm = kick * (1.0 / (rmass ? rmass[i] : mass[type[i]]));
     if (centre_kick)
       for (int k = 0; k < 3; k++) vhalf[i][k] += 0.5 * dtfm * (f[i][k] - fsample[i][k]);
     for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
@@ -731,7 +639,7 @@ void FixPEJump::post_run()
     utils::logmesg(lmp,
                    "Fix {} quadrature auto {}: steps with lobatto 2: {}, lobatto 3: {}, "
                    "lobatto 5: {}\n",
-                   style, auto_tol, auto_steps[0], auto_steps[1], auto_steps[2]);
+                   style, opts.auto_tol, auto_steps[0], auto_steps[1], auto_steps[2]);
   auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
 }
 
@@ -771,7 +679,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   const double *rmass = atom->rmass;
   const double *mass = atom->mass;
   const int *type = atom->type;
-  const double kick = (init_style == INIT_KICK) ? force->ftm2v : 0.0;
+  const double kick = (opts.init_style == PEJump::Options::KICK) ? force->ftm2v : 0.0;
   for_atoms(nullptr, [&](int i) {
     const double dtfm = kick * kick_step(i) / (rmass ? rmass[i] : mass[type[i]]);
     for (int k = 0; k < 3; k++) {
@@ -784,8 +692,8 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   // fixes defined after this one act on the forces after its setup(): redo
   // the initial kick with the complete forces at the first step
 
-  reinit_pending =
-      with_start && (init_style == INIT_KICK) && !split_primary && sampler->has_projections();
+  reinit_pending = with_start && (opts.init_style == PEJump::Options::KICK) && !split_primary &&
+      sampler->has_projections();
   started = 1;
   steps->forget();
   guard->forget_stats();
@@ -828,9 +736,9 @@ void FixPEJump::primary_sampled_force()
     if (force->newton) comm->reverse_comm(this);
   } else {
     NodeSampler::Keep keep(*nodes);
-    sampler->compute(sample_mask, 0, 0);
+    sampler->compute(opts.sample_mask, 0, 0);
     if (nlocal) memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
-    evals_step += sampler->fraction(sample_mask);
+    evals_step += sampler->fraction(opts.sample_mask);
   }
   // at setup, fixes after this one have not yet acted on the forces
   if (sampler->has_projections() && (split_primary || update->setupflag)) project_sampled();
@@ -869,7 +777,7 @@ void FixPEJump::refresh_start_nodes()
     if (std::isnan(fstart[i][0])) fresh.push_back(i);
   });
   store_start_node();
-  if (init_style != INIT_KICK) return;
+  if (opts.init_style != PEJump::Options::KICK) return;
   double **v = atom->v;
   double **vhalf = field(VHALF);
   double **jump = field(JUMP);
@@ -917,7 +825,7 @@ void FixPEJump::quadrature_sum()
   if (rule->size() - first <= 1) return;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, field(VHALF),
-                       group_atoms(node_select), sample_mask, fsum, nullptr);
+                       group_atoms(node_select), opts.sample_mask, fsum, nullptr);
   evals_step += evaluated * node_cost();
 }
 
@@ -944,8 +852,9 @@ void FixPEJump::auto_quadrature_sum()
     if (std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
   });
-  const double vnew = (update->eflag_global == update->ntimestep) ? sampler->energy(sample_mask)
-                                                                  : potential_now(sample_mask);
+  const double vnew = (update->eflag_global == update->ntimestep)
+      ? sampler->energy(opts.sample_mask)
+      : potential_now(opts.sample_mask);
   const double dv = vnew - vprev;
   vprev = vnew;
   modify->get_compute_by_id(id_pe)->addstep(update->ntimestep + 1);
@@ -969,7 +878,7 @@ void FixPEJump::auto_quadrature_sum()
       double **fj = kept(level, j);
       if (!fj) {
         if (!keep) keep = std::make_unique<NodeSampler::Keep>(*nodes, NodeSampler::ALL_OWNED);
-        nodes->evaluate_at((r.node[j] - 1.0) * h_step, vhalf, group_atoms(), sample_mask);
+        nodes->evaluate_at((r.node[j] - 1.0) * h_step, vhalf, group_atoms(), opts.sample_mask);
         evals_step += node_cost();
         fj = f;
         if (!last) {
@@ -983,7 +892,7 @@ void FixPEJump::auto_quadrature_sum()
         for (int k = 0; k < 3; k++) fsum[i][k] += w * fj[i][k];
       });
     }
-    if (last || (auto_defect(dv) <= auto_tol)) break;
+    if (last || (auto_defect(dv) <= opts.auto_tol)) break;
     ++level;
   }
   keep.reset();
@@ -1009,7 +918,7 @@ double FixPEJump::auto_defect(double dv) const
 
 double FixPEJump::node_cost()
 {
-  return sampler->fraction(sample_mask);
+  return sampler->fraction(opts.sample_mask);
 }
 
 /* ----------------------------------------------------------------------
@@ -1052,7 +961,7 @@ void FixPEJump::finish_check(const double *local)
   values[StabilityGuard::NMEASURES] = impulse_local;
   MPI_Allreduce(values, global, StabilityGuard::NMEASURES + 1, MPI_DOUBLE, MPI_MAX, world);
   impulse_local = 0;
-  if ((global[StabilityGuard::NMEASURES] > 0.0) && (damp_time < 0.0)) damping = 1;
+  if ((global[StabilityGuard::NMEASURES] > 0.0) && (opts.damp_time < 0.0)) damping = 1;
 
   switch (guard->judge(global)) {
     case StabilityGuard::UNSTABLE:

@@ -21,6 +21,7 @@ FixStyle(pe_jump,FixPEJump);
 #define LMP_FIX_PE_JUMP_H
 
 #include "fix.h"
+#include "pe_jump_options.h"
 
 #include <string>
 #include <vector>
@@ -74,7 +75,6 @@ class FixPEJump : public Fix {
   double memory_usage() override;
 
  protected:
-  enum Init { INIT_KICK, INIT_PAPER };
   using AtomList = std::vector<int>;
 
   // for derived styles: keywords are parsed from arg[first_keyword] on;
@@ -99,16 +99,13 @@ class FixPEJump : public Fix {
   int VHALF, JUMP, FSTART;
   double **field(int which) const;
 
-  int init_style;
-  int sample_mask;    // contributions sampled at the quadrature nodes
-  double auto_tol;    // quadrature auto: defect tolerance (energy)
-  bigint auto_steps[3];
-  char *id_pe;                    // compute pe that requests the energy at every step (auto)
-  double vprev;                   // potential energy at the start of the step (auto)
-  double damp_time, damp_rate;    // damp keyword (-1 auto) and 1/damping time
-  int damping;                    // 1 if the parasitic mode is damped now
-  int impulse_local;              // another fix changed a velocity in this step (this rank)
-  int buffer_layers;              // pe_jump/async: layers of slow atoms on the fine clock
+  PEJump::Options opts;    // the keywords
+  bigint auto_steps[3];    // quadrature auto: steps with each rule
+  char *id_pe;             // compute pe that requests the energy at every step (auto)
+  double vprev;            // potential energy at the start of the step (auto)
+  double damp_rate;        // 1/damping time
+  int damping;             // 1 if the parasitic mode is damped now
+  int impulse_local;       // another fix changed a velocity in this step (this rank)
 
   // per-step work arrays (not migrated), only those the rule needs
   double **fsum;       // quadrature sum of the forces over the step

@@ -86,9 +86,9 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
   if (steps->keeps_history())
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
-  if (damp_time >= 0.0)
+  if (opts.damp_time >= 0.0)
     error->all(FLERR, "Fix pe_jump/async does not support the damp keyword yet");
-  if (sample_mask != ForceSampler::ALL)
+  if (opts.sample_mask != ForceSampler::ALL)
     error->all(FLERR,
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
@@ -123,7 +123,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
 void FixPEJumpAsync::post_constructor()
 {
   FixPEJump::post_constructor();
-  if (buffer_layers > 0) group->find_or_create((std::string(id) + "_fine_clock").c_str());
+  if (opts.buffer_layers > 0) group->find_or_create((std::string(id) + "_fine_clock").c_str());
 }
 
 /* ---------------------------------------------------------------------- */
@@ -201,7 +201,7 @@ void FixPEJumpAsync::init()
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted", fast_group);
   finebit = group->bitmask[ifast];
   clockbit = finebit;
-  if (buffer_layers > 0) {
+  if (opts.buffer_layers > 0) {
     const std::string clock_group = std::string(id) + "_fine_clock";
     const int iclock = group->find(clock_group);
     if (iclock < 0)
@@ -259,7 +259,7 @@ void FixPEJumpAsync::assign_buffer()
   }
   // each layer adds the slow partners of the fine clock; stop early when a
   // layer adds no atom (everything reachable is on the fine clock)
-  for (int layer = 0; layer < buffer_layers; layer++) {
+  for (int layer = 0; layer < opts.buffer_layers; layer++) {
     split->build();
     split->mark_fine_participants(participant);
     gather_flags(participant);
@@ -468,7 +468,8 @@ void FixPEJumpAsync::setup(int vflag)
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
-  if ((buffer_layers > 0) && (!started || (buffer_layers != saved_buffer))) assign_buffer();
+  if ((opts.buffer_layers > 0) && (!started || (opts.buffer_layers != saved_buffer)))
+    assign_buffer();
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
@@ -483,7 +484,7 @@ void FixPEJumpAsync::setup(int vflag)
   velocity_changed = 0;
   check_clocks();
   FixPEJump::setup(vflag);
-  saved_buffer = buffer_layers;
+  saved_buffer = opts.buffer_layers;
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
   label_classes();
@@ -534,9 +535,9 @@ std::string FixPEJumpAsync::instability_advice() const
                      "section of the fix pe_jump/async documentation), is unstable: reduce the "
                      "time step or change K{}",
                      h_step, nfine * h_step,
-                     buffer_layers ? ""
-                                   : ", or add the keyword buffer 1 (the slow partners of "
-                                     "the interface then take the fine step)");
+                     opts.buffer_layers ? ""
+                                        : ", or add the keyword buffer 1 (the slow partners of "
+                                          "the interface then take the fine step)");
 }
 
 /* ----------------------------------------------------------------------
@@ -676,7 +677,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
   split->activate(InteractionSplit::COARSE);
   const int evaluated =
       nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, field(VHALF),
-                       group_atoms(&slow_atoms), sample_mask, fcoarse, fstart_coarse);
+                       group_atoms(&slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
   evals_step += evaluated * node_cost();
   split->restore();
 }
