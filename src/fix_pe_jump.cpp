@@ -43,6 +43,7 @@
 #include "update.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <memory>
 
@@ -93,8 +94,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 
   // the per-atom state; step control adds the force history it needs
   state = new AtomState(lmp);
-  VHALF = state->add("vhalf", 3, 0.0);
   JUMP = state->add("jump", 3, 0.0);
+  VSIG = state->add("vsig", 1, 0.0);
   FSTART = rule->has_end_nodes() ? state->add("fstart", 3, std::nan("")) : -1;
   const bool compensate = (opts.compensate < 0) ? (opts.adapt_eps > 0.0) : (opts.compensate != 0);
   steps =
@@ -301,9 +302,10 @@ void FixPEJump::initial_integrate(int /*vflag*/)
 
   h_step = update->dt;
   node_impulses();
+  open_steps();
   if (steps->keeps_history()) {
     grow_work();
-    if (steps->compensate(h_step, group_atoms(), field(VHALF), field(JUMP), fsum)) {
+    if (steps->compensate(h_step, group_atoms(), atom->v, field(JUMP), fsum)) {
       cached_step = -1;
       guard->forget_stats();
     }
@@ -338,41 +340,67 @@ void FixPEJump::agree_on_started()
 }
 
 /* ----------------------------------------------------------------------
-   impulses at the node q^n: a velocity that another fix (or a command
-   between runs that did not restart the scheme) changed since the last
-   step changes the free-flight velocity by the same amount and leaves the
-   jump alone; with a Lobatto rule, forces that the rule does not integrate
-   give the second half of their kick (the first half went into the node
-   velocity at the end of the last step, as in velocity Verlet)
+   impulses at the node q^n: a velocity that another fix changed since the
+   last step is an impulse there (the free-flight velocity v^n + [v]^n/2
+   follows it, the jump stays); damp auto takes note. With a Lobatto rule,
+   forces that the rule does not integrate give the second half of their
+   kick (the first half went into the node velocity at the end of the last
+   step, as in velocity Verlet): see open_steps()
 ------------------------------------------------------------------------- */
 
 void FixPEJump::node_impulses()
 {
+  if (!watch_velocities()) return;
+  bool changed = false;
+  for_atoms(nullptr, [&](int i) {
+    if (velocity_changed(i)) changed = true;
+  });
+  if (!changed) return;
+  impulse_local = 1;
+  // the speeds taken at the end of the last step no longer bound the
+  // excursion of this step's nodes
+  guard->forget_stats();
+}
+
+/* ----------------------------------------------------------------------
+   the steps of all atoms of the group begin: v^{n+1/2} = v^n + [v]^n/2
+   (and the second half of the end kick of forces outside a Lobatto rule)
+------------------------------------------------------------------------- */
+
+void FixPEJump::open_steps()
+{
   double **v = atom->v;
   double **f = atom->f;
-  double **vhalf = field(VHALF);
   double **jump = field(JUMP);
   double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
   const bool half_kick = split_primary && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
-  const bool compare = others->may_change_velocities(OtherFixes::BETWEEN_STEPS);
-  if (!compare && !half_kick) return;
-  bool changed = half_kick;
   for_atoms(nullptr, [&](int i) {
-    for (int k = 0; k < 3; k++)
-      if (compare && (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k])) {
-        vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
-        changed = true;
-        impulse_local = 1;
-      }
+    for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
     if (half_kick && !std::isnan(fstart[i][0])) {
       const double dtfm = dth * inverse_mass_of(i);
-      for (int k = 0; k < 3; k++) vhalf[i][k] += dtfm * (f[i][k] - fstart[i][k]);
+      for (int k = 0; k < 3; k++) v[i][k] += dtfm * (f[i][k] - fstart[i][k]);
     }
   });
-  // the speeds taken at the end of the last step no longer bound the
-  // excursion of this step's nodes
-  if (changed) guard->forget_stats();
+  if (half_kick) guard->forget_stats();
+}
+
+/* ----------------------------------------------------------------------
+   inside a step a velocity change by another fix is an impulse on the
+   free-flight velocity, which atom->v then holds: only those between the
+   steps need noticing (for damp auto)
+------------------------------------------------------------------------- */
+
+bool FixPEJump::watch_velocities() const
+{
+  return others->may_change_velocities(OtherFixes::BETWEEN_STEPS);
+}
+
+/* ---------------------------------------------------------------------- */
+
+PEJump::FreeFlight FixPEJump::free_flight() const
+{
+  return {atom->v, nullptr, nullptr};
 }
 
 /* ----------------------------------------------------------------------
@@ -386,7 +414,6 @@ void FixPEJump::advance(double t)
 {
   double **x = atom->x;
   double **v = atom->v;
-  double **vhalf = field(VHALF);
   // on a step that rebuilds the lists, they are built (and atoms exchanged
   // and sorted) at the end node q^{n+1}, as with fix nve, so that a run
   // continued from a restart, which builds them there, reproduces the
@@ -395,10 +422,7 @@ void FixPEJump::advance(double t)
   const double now = later ? h_step : t;
   advance_pending = later ? t - h_step : 0.0;
   for_atoms(nullptr, [&](int i) {
-    for (int k = 0; k < 3; k++) {
-      v[i][k] = vhalf[i][k];
-      x[i][k] += now * vhalf[i][k];
-    }
+    for (int k = 0; k < 3; k++) x[i][k] += now * v[i][k];
   });
 }
 
@@ -410,9 +434,9 @@ void FixPEJump::post_neighbor()
 {
   if (advance_pending == 0.0) return;
   double **x = atom->x;
-  double **vhalf = field(VHALF);
+  double **v = atom->v;
   for_atoms(nullptr, [&](int i) {
-    for (int k = 0; k < 3; k++) x[i][k] += advance_pending * vhalf[i][k];
+    for (int k = 0; k < 3; k++) x[i][k] += advance_pending * v[i][k];
   });
   advance_pending = 0.0;
   comm->forward_comm();
@@ -455,6 +479,41 @@ int FixPEJump::owned_atoms() const
 double **FixPEJump::field(int which) const
 {
   return state->vec(which);
+}
+
+/* ----------------------------------------------------------------------
+   a fingerprint of a velocity (53 bits of a hash of its components, -0
+   taken as 0): a velocity that differs from the one the fix left has
+   another fingerprint but with a chance of 2^-53
+------------------------------------------------------------------------- */
+
+double FixPEJump::fingerprint(const double *v)
+{
+  uint64_t h = 0x9e3779b97f4a7c15ULL;
+  for (int k = 0; k < 3; k++) {
+    const double c = (v[k] == 0.0) ? 0.0 : v[k];
+    uint64_t bits;
+    memcpy(&bits, &c, sizeof(bits));
+    h ^= bits + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+    h ^= h >> 31;
+    h *= 0xbf58476d1ce4e5b9ULL;
+    h ^= h >> 29;
+  }
+  return static_cast<double>(h >> 11);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool FixPEJump::velocity_changed(int i) const
+{
+  return fingerprint(atom->v[i]) != state->val(VSIG)[i];
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJump::mark_velocity(int i)
+{
+  state->val(VSIG)[i] = fingerprint(atom->v[i]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -518,15 +577,8 @@ void FixPEJump::final_integrate()
   grow_work();
   evals_step = 1.0;
 
-  // velocities changed by other fixes during the step (wall/reflect, ...)
-  if (others->may_change_velocities(OtherFixes::INSIDE_STEP)) {
-    double **v = atom->v;
-    double **vhalf = field(VHALF);
-    for_atoms(nullptr, [&](int i) {
-      for (int k = 0; k < 3; k++)
-        if (v[i][k] != vhalf[i][k]) vhalf[i][k] = v[i][k];
-    });
-  }
+  // a velocity changed by another fix during the step (wall/reflect, ...)
+  // changed the free-flight velocity, which atom->v holds: an impulse
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
@@ -560,11 +612,11 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   double **x = atom->x;
   double **v = atom->v;
   double **f = atom->f;
-  double **vhalf = field(VHALF);
   double **jump = field(JUMP);
   const bool keep_start = rule->has_end_nodes();
   double **fstart = keep_start ? field(FSTART) : nullptr;
   double **fhist = only ? nullptr : steps->next_history();
+  const bool mark = watch_velocities();
   const double kick = 2.0 * h_step * force->ftm2v;
   // forces not integrated by the rule: an impulse at the centre of the step
   // (position Verlet), or at its end node half now and half at the start of
@@ -580,23 +632,26 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   const int *type = atom->type;
   const auto one = [&](int i) {
     const double dtfm = kick * (1.0 / (rmass ? rmass[i] : mass[type[i]]));
+    double *vh = v[i];    // v^{n+1/2} until the node velocity is set
+    double *jmp = jump[i];
     if (centre_kick)
-      for (int k = 0; k < 3; k++) vhalf[i][k] += 0.5 * dtfm * (f[i][k] - fsample[i][k]);
-    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+      for (int k = 0; k < 3; k++) vh[k] += 0.5 * dtfm * (f[i][k] - fsample[i][k]);
+    for (int k = 0; k < 3; k++) x[i][k] += rest * vh[k];
     if (beta > 0.0)
-      for (int k = 0; k < 3; k++) jump[i][k] *= 1.0 - beta;
-    two_step_jump((1.0 - 0.5 * beta) * dtfm, favg[i], jump[i], vhalf[i], v[i]);
-    if (end_kick)
-      for (int k = 0; k < 3; k++) {
-        vhalf[i][k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
-        v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-      }
+      for (int k = 0; k < 3; k++) jmp[k] *= 1.0 - beta;
+    double vnew[3];
     for (int k = 0; k < 3; k++) {
+      jmp[k] = (1.0 - 0.5 * beta) * dtfm * favg[i][k] - jmp[k];
+      if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
+      vnew[k] = vh[k] + jmp[k];
+      vh[k] = vnew[k] - 0.5 * jmp[k];    // the node velocity v^{n+1}
+      jmp[k] = 2.0 * (vnew[k] - vh[k]);    // so that v^{n+1} + [v]/2 gives v^{n+3/2} back
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
-    vv = MAX(vv, vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
-    jj = MAX(jj, jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
+    if (mark) mark_velocity(i);
+    vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
+    jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
   };
   for_atoms(only, one);
   mag[0] = vv;
@@ -605,10 +660,20 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJump::jump_atom(int i, double h, const double *favg)
+void FixPEJump::jump_atom(int i, double h, const double *favg, double *mag)
 {
   const double dtfm = 2.0 * h * force->ftm2v * inverse_mass_of(i);
-  two_step_jump(dtfm, favg, field(JUMP)[i], field(VHALF)[i], atom->v[i]);
+  double *v = atom->v[i];
+  double *jmp = field(JUMP)[i];
+  double vnew[3];
+  for (int k = 0; k < 3; k++) {
+    jmp[k] = dtfm * favg[k] - jmp[k];
+    vnew[k] = v[k] + jmp[k];
+    v[k] = vnew[k] - 0.5 * jmp[k];
+    jmp[k] = 2.0 * (vnew[k] - v[k]);
+  }
+  mag[0] = MAX(mag[0], vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
+  mag[1] = MAX(mag[1], jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
 }
 
 /* ----------------------------------------------------------------------
@@ -630,11 +695,17 @@ void FixPEJump::tally_at_node()
 }
 
 /* ----------------------------------------------------------------------
-   quadrature auto: say how often each rule was taken in this run
+   the end of a run: remember the velocities; quadrature auto says how
+   often each rule was taken
 ------------------------------------------------------------------------- */
 
 void FixPEJump::post_run()
 {
+  // the velocities as the run leaves them, for the next run to compare
+  for_atoms(nullptr, [&](int i) {
+    mark_velocity(i);
+  });
+
   if (nested && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {} quadrature auto {}: steps with lobatto 2: {}, lobatto 3: {}, "
@@ -655,8 +726,8 @@ void FixPEJump::end_of_step()
    v^0 and forces F(q^0):
      kick:  v^{1/2} = v^0 + (h/2) F/m, [v]^0 = h F/m
      paper: v^{1/2} = v^0,            [v]^0 = 0
-   the node velocity v^0 = v^{1/2} - [v]^0/2 is stored back so that a later
-   run can tell whether velocities were changed in between.
+   the node velocity v^0 stays in atom->v (its fingerprint tells a later
+   run whether velocities were changed in between).
    with_start: also store the sampled force at q^0 as the Lobatto start node
    (not when only the kick is redone with the complete forces)
 ------------------------------------------------------------------------- */
@@ -674,7 +745,6 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   // the jump takes the forces that the rule integrates
   double **v = atom->v;
   double **f = split_primary ? fsample : atom->f;
-  double **vhalf = field(VHALF);
   double **jump = field(JUMP);
   const double *rmass = atom->rmass;
   const double *mass = atom->mass;
@@ -682,11 +752,8 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   const double kick = (opts.init_style == PEJump::Options::KICK) ? force->ftm2v : 0.0;
   for_atoms(nullptr, [&](int i) {
     const double dtfm = kick * kick_step(i) / (rmass ? rmass[i] : mass[type[i]]);
-    for (int k = 0; k < 3; k++) {
-      jump[i][k] = dtfm * f[i][k];
-      vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
-      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-    }
+    for (int k = 0; k < 3; k++) jump[i][k] = dtfm * f[i][k];
+    mark_velocity(i);
   });
 
   // fixes defined after this one act on the forces after its setup(): redo
@@ -778,16 +845,10 @@ void FixPEJump::refresh_start_nodes()
   });
   store_start_node();
   if (opts.init_style != PEJump::Options::KICK) return;
-  double **v = atom->v;
-  double **vhalf = field(VHALF);
   double **jump = field(JUMP);
   for (const int i : fresh) {
     const double dtfm = force->ftm2v * update->dt * inverse_mass_of(i);
-    for (int k = 0; k < 3; k++) {
-      jump[i][k] = dtfm * fstart[i][k];
-      vhalf[i][k] = v[i][k] + 0.5 * jump[i][k];
-      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-    }
+    for (int k = 0; k < 3; k++) jump[i][k] = dtfm * fstart[i][k];
   }
 }
 
@@ -824,7 +885,7 @@ void FixPEJump::quadrature_sum()
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
   const int evaluated =
-      nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, field(VHALF),
+      nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
                        group_atoms(node_select), opts.sample_mask, fsum, nullptr);
   evals_step += evaluated * node_cost();
 }
@@ -845,7 +906,6 @@ void FixPEJump::auto_quadrature_sum()
 {
   double **f = atom->f;
   double **fstart = field(FSTART);
-  double **vhalf = field(VHALF);
 
   primary_sampled_force();    // F(1) into fsample
   for_atoms(nullptr, [&](int i) {
@@ -878,7 +938,8 @@ void FixPEJump::auto_quadrature_sum()
       double **fj = kept(level, j);
       if (!fj) {
         if (!keep) keep = std::make_unique<NodeSampler::Keep>(*nodes, NodeSampler::ALL_OWNED);
-        nodes->evaluate_at((r.node[j] - 1.0) * h_step, vhalf, group_atoms(), opts.sample_mask);
+        nodes->evaluate_at((r.node[j] - 1.0) * h_step, free_flight(), group_atoms(),
+                           opts.sample_mask);
         evals_step += node_cost();
         fj = f;
         if (!last) {
@@ -905,7 +966,7 @@ void FixPEJump::auto_quadrature_sum()
 
 double FixPEJump::auto_defect(double dv) const
 {
-  double **vhalf = field(VHALF);
+  double **vhalf = atom->v;
   double local = 0.0, global = 0.0;
   for_atoms(nullptr, [&](int i) {
     local += vhalf[i][0] * fsum[i][0] + vhalf[i][1] * fsum[i][1] + vhalf[i][2] * fsum[i][2];
@@ -940,10 +1001,10 @@ void FixPEJump::check_excursion(double lo, double hi)
     local[2] = h_step * h_step * guard->jump2();
     local[3] = guard->jump2();
     local[4] = guard->speed2();
-    if (xhold) local[0] = guard->excursion(group_atoms(), field(VHALF), xhold, lo, hi);
+    if (xhold) local[0] = guard->excursion(group_atoms(), free_flight(), xhold, lo, hi);
   } else {
     const StabilityGuard::Nodes at{h_step, lo, hi, cp, nullptr, 0.0, 0.0, 0.0, nullptr};
-    guard->measure(group_atoms(), field(VHALF), field(JUMP), xhold, at, local);
+    guard->measure(group_atoms(), free_flight(), field(JUMP), xhold, at, local);
   }
   finish_check(local);
 }
@@ -1005,35 +1066,28 @@ std::string FixPEJump::instability_advice() const
 }
 
 /* ----------------------------------------------------------------------
-   0: velocities are the node velocities this fix left, 1: all of them were
-   reversed (continue backwards in time: v^{1/2} -> -v^{-1/2}, same jump),
-   2: changed otherwise
+   0: velocities are those this fix left, 1: all of them were reversed
+   (the free-flight velocity -v^n + [v]^n/2 = -v^{n-1/2} then continues
+   backwards in time with the same jump), 2: changed otherwise
 ------------------------------------------------------------------------- */
 
 int FixPEJump::detect_velocity_change()
 {
   double **v = atom->v;
-  double **vhalf = field(VHALF);
-  double **jump = field(JUMP);
+  const double *vsig = state->val(VSIG);
 
   int local[2] = {0, 0};    // some differ, some are not reversed
   for_atoms(nullptr, [&](int i) {
-    for (int k = 0; k < 3; k++) {
-      const double vnode = vhalf[i][k] - 0.5 * jump[i][k];
-      if (v[i][k] != vnode) local[0] = 1;
-      if (v[i][k] != -vnode) local[1] = 1;
-    }
+    const double back[3] = {-v[i][0], -v[i][1], -v[i][2]};
+    if (fingerprint(v[i]) != vsig[i]) local[0] = 1;
+    if (fingerprint(back) != vsig[i]) local[1] = 1;
   });
   int global[2];
   MPI_Allreduce(local, global, 2, MPI_INT, MPI_MAX, world);
   if (!global[0]) return 0;
   if (global[1] || !can_reverse()) return 2;
-
   for_atoms(nullptr, [&](int i) {
-    for (int k = 0; k < 3; k++) {
-      vhalf[i][k] = jump[i][k] - vhalf[i][k];
-      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
-    }
+    mark_velocity(i);
   });
   cached_step = -1;
   return 1;
@@ -1076,13 +1130,14 @@ void FixPEJump::energies()
 {
   if (cached_step == update->ntimestep) return;
 
-  double **vhalf = field(VHALF);
+  double **v = atom->v;
   double **jump = field(JUMP);
   double local[2] = {0.0, 0.0};
   for_atoms(nullptr, [&](int i) {
     const double m = atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
+    // with v^{n+1/2} = v^n + [v]^n/2: v^{n-1/2}.v^{n+1/2} = |v^n|^2 - |[v]^n|^2/4
     for (int k = 0; k < 3; k++) {
-      local[0] += m * (vhalf[i][k] - jump[i][k]) * vhalf[i][k];
+      local[0] += m * (v[i][k] * v[i][k] - 0.25 * jump[i][k] * jump[i][k]);
       local[1] += m * jump[i][k] * jump[i][k];
     }
   });
@@ -1156,14 +1211,14 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
 
 /* ----------------------------------------------------------------------
    an atom created during the simulation (fix deposit, create_atoms) starts
-   with its velocity as free-flight and node velocity and no jump; its
+   with its velocity (node and free-flight velocity) and no jump; its
    start-node force is taken at its first force evaluation (NaN until then)
 ------------------------------------------------------------------------- */
 
 void FixPEJump::set_arrays(int i)
 {
   state->reset(i);
-  for (int k = 0; k < 3; k++) field(VHALF)[i][k] = atom->v[i][k];
+  mark_velocity(i);
   fresh_atoms = 1;
 }
 
@@ -1228,6 +1283,8 @@ void FixPEJump::restart(char *buf)
 
 int FixPEJump::pack_restart(int i, double *buf)
 {
+  // written during a run: the velocities are the fix's own
+  if (update->whichflag) mark_velocity(i);
   buf[0] = state->values() + 1;
   state->pack(i, &buf[1]);
   return state->values() + 1;

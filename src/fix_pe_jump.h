@@ -37,6 +37,7 @@ namespace PEJump {
   class StabilityGuard;
   class StepControl;
   struct AtomSet;
+  struct FreeFlight;
 }    // namespace PEJump
 
 class FixPEJump : public Fix {
@@ -94,10 +95,16 @@ class FixPEJump : public Fix {
   PEJump::StabilityGuard *guard;
   PEJump::OtherFixes *others;
 
-  // per-atom state fields: free-flight velocity v^{n+1/2}, jump [v]^n,
-  // and (Lobatto rules) the sampled force at the start node
-  int VHALF, JUMP, FSTART;
+  // per-atom state fields: the jump [v]^n, a fingerprint of the velocity
+  // the fix left in atom->v (a velocity found different was changed by
+  // someone else), and (Lobatto rules) the sampled force at the start node.
+  // Between its steps an atom's atom->v is its node velocity v^n; inside
+  // them, its free-flight velocity v^{n+1/2} = v^n + [v]^n/2.
+  int JUMP, VSIG, FSTART;
   double **field(int which) const;
+  static double fingerprint(const double *v);
+  bool velocity_changed(int i) const;
+  void mark_velocity(int i);
 
   PEJump::Options opts;    // the keywords
   bigint auto_steps[3];    // quadrature auto: steps with each rule
@@ -131,6 +138,9 @@ class FixPEJump : public Fix {
   virtual void start_scheme(const char *, bool);
   void agree_on_started();
   virtual void node_impulses();
+  virtual void open_steps();                // v^n -> v^{n+1/2} of the atoms whose step begins
+  virtual bool watch_velocities() const;    // velocities other fixes change are noticed
+  virtual PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
   void refresh_start_nodes();
   double inverse_mass_of(int) const;
   void primary_sampled_force();
@@ -165,23 +175,13 @@ class FixPEJump : public Fix {
   const int *atom_mask() const;    // atom->mask, atom->nlocal (the header
   int owned_atoms() const;         // needs no definition of class Atom)
 
-  // two-step update of owned atom i with the quadrature sum favg of the
-  // forces over a step of size h: [v]^{n+1} = 2 h favg / m - [v]^n,
-  // v^{n+3/2} = v^{n+1/2} + [v]^{n+1}, node velocity v^{n+1}
-  void jump_atom(int i, double h, const double *favg);
+  // two-step update of owned atom i (v its free-flight velocity v^{n+1/2})
+  // with the quadrature sum favg of the forces over a step of size h:
+  // [v]^{n+1} = 2 h favg / m - [v]^n, v^{n+3/2} = v^{n+1/2} + [v]^{n+1};
+  // v becomes the node velocity v^{n+1} = v^{n+3/2} - [v]^{n+1}/2.
+  // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
+  void jump_atom(int i, double h, const double *favg, double *mag);
   void finish_step(const AtomList *only, double **favg, double rest, double *mag);
-
-  // the same for the arrays of one atom, with dtfm = 2 h ftm2v / m
-  static inline void two_step_jump(double dtfm, const double *favg, double *jmp, double *vh,
-                                   double *v)
-  {
-    for (int k = 0; k < 3; k++) {
-      const double newjump = dtfm * favg[k] - jmp[k];
-      vh[k] += newjump;
-      jmp[k] = newjump;
-      v[k] = vh[k] - 0.5 * jmp[k];
-    }
-  }
 
   // hooks for derived styles
   virtual double kick_step(int) const;               // step size of the initial kick of an atom

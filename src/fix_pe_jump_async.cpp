@@ -66,9 +66,8 @@ static constexpr int NASYNC_GLOBAL = 6;    // K, fine step index, elapsed time, 
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     FixPEJump(lmp, narg, arg, 5, true), nfine(1), finebit(0), clockbit(0), fine_index(0),
-    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0),
-    velocity_changed(0), saved_buffer(-1), split(nullptr), tnow(0.0), fcoarse(nullptr),
-    nmax_coarse(0)
+    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0), changes_seen(0),
+    saved_buffer(-1), split(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   nfine = utils::inumeric(FLERR, arg[3], false, lmp);
@@ -280,18 +279,18 @@ void FixPEJumpAsync::assign_buffer()
 /* ----------------------------------------------------------------------
    fix pe_jump takes a velocity that another fix changed as an impulse;
    here a slow atom has no node velocity inside a coarse step, so such
-   changes are refused. The atoms on the fine clock are checked every fine
-   step, all atoms at coarse nodes, where the ranks agree on the outcome.
+   changes are refused. All atoms are checked every fine step (before
+   their steps begin, and before they jump), and the ranks agree on the
+   outcome at coarse nodes.
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::node_impulses()
 {
-  if (!others->may_change_velocities(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) return;
-  if (others->may_change_velocities(OtherFixes::BETWEEN_STEPS))
-    note_velocity_changes(fine_index ? &fast_atoms : nullptr);
+  if (!watch_velocities()) return;
+  note_velocity_changes();
   if (fine_index) return;
   int any = 0;
-  MPI_Allreduce(&velocity_changed, &any, 1, MPI_INT, MPI_MAX, world);
+  MPI_Allreduce(&changes_seen, &any, 1, MPI_INT, MPI_MAX, world);
   if (any)
     error->all(FLERR,
                "Fix pe_jump/async: another fix (a thermostat, fix momentum, fix wall/reflect, "
@@ -302,16 +301,44 @@ void FixPEJumpAsync::node_impulses()
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
+void FixPEJumpAsync::note_velocity_changes()
+{
+  for_atoms(nullptr, [&](int i) {
+    if (velocity_changed(i)) changes_seen = 1;
+  });
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::watch_velocities() const
+{
+  return others->may_change_velocities(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
+}
+
+/* ----------------------------------------------------------------------
+   the fine steps of the atoms on the fine clock begin (a slow atom's
+   free-flight velocity is its node velocity plus half its jump)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::open_steps()
 {
   double **v = atom->v;
-  double **vhalf = field(VHALF);
   double **jump = field(JUMP);
-  const auto check = [&](int i) {
-    for (int k = 0; k < 3; k++)
-      if (v[i][k] != vhalf[i][k] - 0.5 * jump[i][k]) velocity_changed = 1;
-  };
-  for_atoms(only, check);
+  const bool mark = watch_velocities();
+  for (const int i : fast_atoms) {
+    for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
+    if (mark) mark_velocity(i);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   the atoms on the fine clock are inside their fine step; the slow atoms
+   keep their node velocity over the coarse step
+------------------------------------------------------------------------- */
+
+PEJump::FreeFlight FixPEJumpAsync::free_flight() const
+{
+  return {atom->v, field(JUMP), slow.data()};
 }
 
 /* ----------------------------------------------------------------------
@@ -392,12 +419,13 @@ void FixPEJumpAsync::find_moving()
 void FixPEJumpAsync::slow_magnitudes()
 {
   stats_slow[0] = stats_slow[1] = 0.0;
-  double **vhalf = field(VHALF);
+  double **v = atom->v;
   double **jump = field(JUMP);
   for (const int i : slow_atoms) {
     double vv = 0.0, jj = 0.0;
     for (int k = 0; k < 3; k++) {
-      vv += vhalf[i][k] * vhalf[i][k];
+      const double vhalf = v[i][k] + 0.5 * jump[i][k];
+      vv += vhalf * vhalf;
       jj += jump[i][k] * jump[i][k];
     }
     stats_slow[0] = MAX(stats_slow[0], vv);
@@ -410,11 +438,13 @@ void FixPEJumpAsync::slow_magnitudes()
 void FixPEJumpAsync::catch_up(int i)
 {
   double **x = atom->x;
-  double **vhalf = field(VHALF);
+  double **v = atom->v;
+  double **jump = field(JUMP);
   double *tpos = state->val(TPOS);
   const double lag = tnow - tpos[i];
+  // only slow atoms lag: their free-flight velocity is v^n + [v]^n/2
   if (lag != 0.0)
-    for (int k = 0; k < 3; k++) x[i][k] += lag * vhalf[i][k];
+    for (int k = 0; k < 3; k++) x[i][k] += lag * (v[i][k] + 0.5 * jump[i][k]);
   tpos[i] = moving[i] ? CURRENT : tnow;
 }
 
@@ -437,15 +467,12 @@ void FixPEJumpAsync::catch_up_all()
 void FixPEJumpAsync::advance(double t)
 {
   double **x = atom->x;
-  double **vhalf = field(VHALF);
+  const PEJump::FreeFlight vhalf = free_flight();
   double *tpos = state->val(TPOS);
   tnow = elapsed + t;
   if (fine_index + 1 < nfine) {
-    for (const int i : moving_atoms) {
-      x[i][0] += t * vhalf[i][0];
-      x[i][1] += t * vhalf[i][1];
-      x[i][2] += t * vhalf[i][2];
-    }
+    for (const int i : moving_atoms)
+      for (int k = 0; k < 3; k++) x[i][k] += t * vhalf(i, k);
     return;
   }
   const int *mask = atom->mask;
@@ -453,9 +480,7 @@ void FixPEJumpAsync::advance(double t)
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     const double dt = (tpos[i] == CURRENT) ? t : tnow - tpos[i];
-    x[i][0] += dt * vhalf[i][0];
-    x[i][1] += dt * vhalf[i][1];
-    x[i][2] += dt * vhalf[i][2];
+    for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
     tpos[i] = CURRENT;
   }
 }
@@ -481,7 +506,7 @@ void FixPEJumpAsync::setup(int vflag)
   // start nodes of slow atoms inside a coarse step cannot be taken again:
   // new atoms take theirs at their first evaluation
   fresh_atoms = 0;
-  velocity_changed = 0;
+  changes_seen = 0;
   check_clocks();
   FixPEJump::setup(vflag);
   saved_buffer = opts.buffer_layers;
@@ -635,7 +660,7 @@ void FixPEJumpAsync::check_lists()
     local[3] = MAX(guard->jump2(), stats_slow[1]);
     local[4] = MAX(guard->speed2(), stats_slow[0]);
     if (xhold && (tally || (rule->size() > 1)))
-      local[0] = guard->excursion(group_atoms(&moving_atoms), field(VHALF), xhold, c_lo * h_step,
+      local[0] = guard->excursion(group_atoms(&moving_atoms), free_flight(), xhold, c_lo * h_step,
                                   c_hi * h_step);
     finish_check(local);
     return;
@@ -655,7 +680,7 @@ void FixPEJumpAsync::check_lists()
     at.hi2 = rule->node.back() * span - elapsed;
     at.lag = lag.data();
   }
-  guard->measure(group_atoms(), field(VHALF), field(JUMP), xhold, at, local);
+  guard->measure(group_atoms(), free_flight(), field(JUMP), xhold, at, local);
   finish_check(local);
 }
 
@@ -676,7 +701,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
   const double at = elapsed + rule->node[rule->primary()] * h_step;
   split->activate(InteractionSplit::COARSE);
   const int evaluated =
-      nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, field(VHALF),
+      nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
                        group_atoms(&slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
   evals_step += evaluated * node_cost();
   split->restore();
@@ -691,7 +716,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 
 void FixPEJumpAsync::final_integrate()
 {
-  if (others->may_change_velocities(OtherFixes::INSIDE_STEP)) note_velocity_changes(&fast_atoms);
+  if (watch_velocities()) note_velocity_changes();
   grow_work();
   if (nmax_coarse < atom->nmax) {
     nmax_coarse = atom->nmax;
@@ -724,12 +749,12 @@ void FixPEJumpAsync::final_integrate()
 
   const bool other_forces = (modify->n_post_force_any > 0);
   double **v = atom->v;
-  double **vhalf = field(VHALF);
   double **jump = field(JUMP);
+  const PEJump::FreeFlight vhalf = free_flight();
   double **fstart = keep_start ? field(FSTART) : nullptr;
   double **facc = field(FACC);
   double *tpos = state->val(TPOS);
-  const double kick = 2.0 * h_step * force->ftm2v;
+  const bool mark = watch_velocities();
   double **favg = direct ? f : fsum;
   // per clock: largest |v|^2, |[v]|^2; the slow atoms' change only at
   // coarse nodes
@@ -738,26 +763,23 @@ void FixPEJumpAsync::final_integrate()
     // every atom reaches the coarse node, the slow ones jump too
     const auto coarse_node = [&](int i) {
       const double dt = (tpos[i] == CURRENT) ? rest : coarse_step - tpos[i];
-      for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf[i][k];
+      for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
       if (keep_start)
         for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
       // interior slow atoms have no fine interactions: only other fixes' forces
       const double *fa = moving[i] ? favg[i] : f[i];
       if (!slow[i]) {
-        const double dtfm = kick * inverse_mass_of(i);
-        two_step_jump(dtfm, fa, jump[i], vhalf[i], v[i]);
+        jump_atom(i, h_step, fa, mag[0]);
       } else {
         double fslow[3];
         for (int k = 0; k < 3; k++) {
           fslow[k] = (facc[i][k] + h_step * fa[k]) / coarse_step + fcoarse[i][k];
           facc[i][k] = 0.0;
         }
-        jump_atom(i, coarse_step, fslow);
+        for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];    // into its step
+        jump_atom(i, coarse_step, fslow, mag[1]);
       }
-      double *m = mag[slow[i]];
-      m[0] = MAX(m[0],
-                 vhalf[i][0] * vhalf[i][0] + vhalf[i][1] * vhalf[i][1] + vhalf[i][2] * vhalf[i][2]);
-      m[1] = MAX(m[1], jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2]);
+      if (mark) mark_velocity(i);
       tpos[i] = moving[i] ? CURRENT : 0.0;    // at the start of the next coarse step
     };
     for (int i = 0; i < nlocal; i++)
@@ -770,7 +792,7 @@ void FixPEJumpAsync::final_integrate()
     // other fixes add forces) collect the fine forces
     finish_step(&fast_atoms, favg, rest, mag[0]);
     for (const int i : slow_moving)
-      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf[i][k];
+      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf(i, k);
     for (const int i : other_forces ? slow_atoms : slow_moving) {
       const double *fa = moving[i] ? favg[i] : f[i];
       for (int k = 0; k < 3; k++) {

@@ -75,7 +75,7 @@ class FixPEJumpAsync : public FixPEJump {
   std::vector<int> *reverse_flags;    // reverse communication carries these flags
   bigint split_calls;                 // neighbor->ncalls when the interactions were split
   bigint topology_at_setup;           // bonds, angles, ... when the run started
-  int velocity_changed;               // another fix changed a velocity (this rank)
+  int changes_seen;                   // another fix changed a velocity (this rank)
   int saved_buffer;                   // buffer layers of the last run (or restart file)
   double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
 
@@ -117,7 +117,10 @@ class FixPEJumpAsync : public FixPEJump {
   bool can_reverse() const override;
 
   bigint topology_count() const;
-  void note_velocity_changes(const AtomList *);
+  void note_velocity_changes();
+  bool watch_velocities() const override;
+  void open_steps() override;
+  PEJump::FreeFlight free_flight() const override;
   void check_clocks();
   void assign_buffer();
   void find_slow();

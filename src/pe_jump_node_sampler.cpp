@@ -90,13 +90,11 @@ NodeSampler::Keep::~Keep()
 
 /* ---------------------------------------------------------------------- */
 
-void NodeSampler::evaluate_at(double shift, double **v, const AtomSet &set, int mask)
+void NodeSampler::evaluate_at(double shift, const FreeFlight &v, const AtomSet &set, int mask)
 {
   double **x = atom->x;
   const auto move = [&](int i) {
-    x[i][0] = xkept[i][0] + shift * v[i][0];
-    x[i][1] = xkept[i][1] + shift * v[i][1];
-    x[i][2] = xkept[i][2] + shift * v[i][2];
+    for (int k = 0; k < 3; k++) x[i][k] = xkept[i][k] + shift * v(i, k);
   };
   set.each(atom->mask, atom->nlocal, move);
   sampler->compute(mask, 0, 0);
@@ -105,7 +103,8 @@ void NodeSampler::evaluate_at(double shift, double **v, const AtomSet &set, int 
 /* ---------------------------------------------------------------------- */
 
 int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double scale, double offset,
-                           double **v, const AtomSet &set, int mask, double **acc, double **fend)
+                           const FreeFlight &v, const AtomSet &set, int mask, double **acc,
+                           double **fend)
 {
   Keep keep(*this, set.list ? LISTED : ALL_OWNED, set.list);
   double **f = atom->f;

@@ -42,6 +42,19 @@ namespace PEJump {
     }
   };
 
+  // Free-flight velocities v^{n+1/2} of the owned atoms: atom->v, where
+  // an atom is inside its step, or its node velocity plus half its jump,
+  // where at_node[i] != 0 (at_node nullptr: every atom is inside its step)
+  struct FreeFlight {
+    double **v;
+    double **jump;
+    const int *at_node;
+    double operator()(int i, int k) const
+    {
+      return (at_node && at_node[i]) ? v[i][k] + 0.5 * jump[i][k] : v[i][k];
+    }
+  };
+
   // Forces at the quadrature nodes of a step. While nodes are sampled, the
   // forces of the MD step (and the positions of the atoms that move to the
   // nodes) are kept aside by a Keep object and put back when it goes out of
@@ -68,14 +81,14 @@ namespace PEJump {
 
     // move the atoms of set to x + shift v and compute the contributions in
     // mask there (forces only); needs a Keep with their positions
-    void evaluate_at(double shift, double **v, const AtomSet &set, int mask);
+    void evaluate_at(double shift, const FreeFlight &v, const AtomSet &set, int mask);
 
     // acc += sum_k w_k F(q_k) over the nodes k = first .. last of rule but
     // skip, q_k = x + (scale c_k + offset) v for the atoms of set (the others
     // stay); fend (if given) gets the forces at the last node. Positions and
     // forces are put back. Returns the number of nodes evaluated.
     int sum_nodes(const Quadrature &rule, int first, int skip, double scale, double offset,
-                  double **v, const AtomSet &set, int mask, double **acc, double **fend);
+                  const FreeFlight &v, const AtomSet &set, int mask, double **acc, double **fend);
 
     ForceSampler *forces() const { return sampler; }
     double memory_usage() const;

@@ -50,23 +50,23 @@ void StabilityGuard::set_stats(double vv, double jj)
 
 /* ---------------------------------------------------------------------- */
 
-void StabilityGuard::measure(const AtomSet &set, double **vhalf, double **jump, double **xhold,
-                             const Nodes &at, double *local) const
+void StabilityGuard::measure(const AtomSet &set, const FreeFlight &vel, double **jump,
+                             double **xhold, const Nodes &at, double *local) const
 {
   double **x = atom->x;
   const auto one = [&](int i) {
+    const double vhalf[3] = {vel(i, 0), vel(i, 1), vel(i, 2)};
     const bool both = at.select && at.select[i];
     const double h = both ? at.hsel : at.h;
     const double late = at.lag ? at.lag[i] : 0.0;
     double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
     for (int k = 0; k < 3; k++) {
-      vv += vhalf[i][k] * vhalf[i][k];
+      vv += vhalf[k] * vhalf[k];
       jj += jump[i][k] * jump[i][k];
       if (xhold) {
         const double a = x[i][k] - xhold[i][k];
-        const double ends[4] = {a + at.lo * vhalf[i][k], a + at.hi * vhalf[i][k],
-                                a + (at.lo2 + late) * vhalf[i][k],
-                                a + (at.hi2 + late) * vhalf[i][k]};
+        const double ends[4] = {a + at.lo * vhalf[k], a + at.hi * vhalf[k],
+                                a + (at.lo2 + late) * vhalf[k], a + (at.hi2 + late) * vhalf[k]};
         for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
       }
     }
@@ -85,17 +85,18 @@ void StabilityGuard::measure(const AtomSet &set, double **vhalf, double **jump, 
 
 /* ---------------------------------------------------------------------- */
 
-double StabilityGuard::excursion(const AtomSet &set, double **vhalf, double **xhold, double lo,
-                                 double hi) const
+double StabilityGuard::excursion(const AtomSet &set, const FreeFlight &vel, double **xhold,
+                                 double lo, double hi) const
 {
   double **x = atom->x;
   double worst = 0.0;
   const auto one = [&](int i) {
+    const double vhalf[3] = {vel(i, 0), vel(i, 1), vel(i, 2)};
     double dlo = 0.0, dhi = 0.0;
     for (int k = 0; k < 3; k++) {
       const double a = x[i][k] - xhold[i][k];
-      dlo += (a + lo * vhalf[i][k]) * (a + lo * vhalf[i][k]);
-      dhi += (a + hi * vhalf[i][k]) * (a + hi * vhalf[i][k]);
+      dlo += (a + lo * vhalf[k]) * (a + lo * vhalf[k]);
+      dhi += (a + hi * vhalf[k]) * (a + hi * vhalf[k]);
     }
     worst = MAX(worst, MAX(dlo, dhi));
   };

@@ -53,11 +53,12 @@ namespace PEJump {
       double lo2, hi2, hsel;
       const double *lag;
     };
-    void measure(const AtomSet &, double **vhalf, double **jump, double **xhold, const Nodes &,
+    void measure(const AtomSet &, const FreeFlight &, double **jump, double **xhold, const Nodes &,
                  double *local) const;
 
     // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
-    double excursion(const AtomSet &, double **vhalf, double **xhold, double lo, double hi) const;
+    double excursion(const AtomSet &, const FreeFlight &, double **xhold, double lo,
+                     double hi) const;
 
     enum Verdict { FINE, REBUILD, UNSTABLE, TOO_FAR };
     Verdict judge(const double *global);    // the reduced measures

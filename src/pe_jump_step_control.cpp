@@ -118,13 +118,11 @@ bool StepControl::compensate(double h, const AtomSet &set, double **vhalf, doubl
   const double ww = sum[1] - (sum[2] * sum[2] + sum[3] * sum[3] + sum[4] * sum[4]) / sum[5];
   const double alpha = (ww > 0.0) ? sum[0] / ww : 0.0;
 
-  double **v = atom->v;
   const auto add = [&](int i) {
     for (int k = 0; k < 3; k++) {
       const double delta = scratch[i][k] - alpha * (vhalf[i][k] - jump[i][k] - vcm[k]);
       jump[i][k] += delta;
       vhalf[i][k] += delta;
-      v[i][k] = vhalf[i][k] - 0.5 * jump[i][k];
     }
   };
   set.each(atom->mask, atom->nlocal, add);

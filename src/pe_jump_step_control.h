@@ -39,8 +39,8 @@ namespace PEJump {
     void start_run(const char *style, double pseudo_energy);
 
     // the atoms of set at the start of a step of size h: add the
-    // compensation of the step-size change to their jumps ([v], v^{n+1/2},
-    // node velocity v), using scratch (3 per owned atom) as work space;
+    // compensation of the step-size change to their jumps ([v] and
+    // v^{n+1/2}), using scratch (3 per owned atom) as work space;
     // false if there was nothing to compensate
     bool compensate(double h, const AtomSet &set, double **vhalf, double **jump, double **scratch);
 
