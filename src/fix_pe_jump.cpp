@@ -350,7 +350,7 @@ void FixPEJump::agree_on_started()
 
 void FixPEJump::node_impulses()
 {
-  if (!watch_velocities()) return;
+  if (!watch(OtherFixes::BETWEEN_STEPS)) return;
   bool changed = false;
   for_atoms(nullptr, [&](int i) {
     if (velocity_changed(i)) changed = true;
@@ -385,15 +385,11 @@ void FixPEJump::open_steps()
   if (half_kick) guard->forget_stats();
 }
 
-/* ----------------------------------------------------------------------
-   inside a step a velocity change by another fix is an impulse on the
-   free-flight velocity, which atom->v then holds: only those between the
-   steps need noticing (for damp auto)
-------------------------------------------------------------------------- */
+/* ---------------------------------------------------------------------- */
 
-bool FixPEJump::watch_velocities() const
+bool FixPEJump::watch(int when) const
 {
-  return others->may_change_velocities(OtherFixes::BETWEEN_STEPS);
+  return others->may_change_velocities(when);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -483,22 +479,25 @@ double **FixPEJump::field(int which) const
 
 /* ----------------------------------------------------------------------
    a fingerprint of a velocity (53 bits of a hash of its components, -0
-   taken as 0): a velocity that differs from the one the fix left has
-   another fingerprint but with a chance of 2^-53
+   taken as 0): a velocity changed by another fix (scaled, reversed,
+   reset, thermostatted) has another fingerprint
 ------------------------------------------------------------------------- */
 
 double FixPEJump::fingerprint(const double *v)
 {
-  uint64_t h = 0x9e3779b97f4a7c15ULL;
+  // odd multipliers: a change of one component always changes the sum;
+  // the rotations keep sign flips of two components from cancelling
+  static constexpr uint64_t K[3] = {0x9e3779b97f4a7c15ULL, 0xbf58476d1ce4e5b9ULL,
+                                    0x94d049bb133111ebULL};
+  uint64_t h = 0;
   for (int k = 0; k < 3; k++) {
     const double c = (v[k] == 0.0) ? 0.0 : v[k];
     uint64_t bits;
     memcpy(&bits, &c, sizeof(bits));
-    h ^= bits + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
-    h ^= h >> 31;
-    h *= 0xbf58476d1ce4e5b9ULL;
-    h ^= h >> 29;
+    bits = (bits << (21 * k)) | (k ? bits >> (64 - 21 * k) : 0);
+    h += bits * K[k];
   }
+  h ^= h >> 29;
   return static_cast<double>(h >> 11);
 }
 
@@ -616,7 +615,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   const bool keep_start = rule->has_end_nodes();
   double **fstart = keep_start ? field(FSTART) : nullptr;
   double **fhist = only ? nullptr : steps->next_history();
-  const bool mark = watch_velocities();
+  const bool mark = watch(OtherFixes::BETWEEN_STEPS);
   const double kick = 2.0 * h_step * force->ftm2v;
   // forces not integrated by the rule: an impulse at the centre of the step
   // (position Verlet), or at its end node half now and half at the start of
@@ -644,7 +643,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
       jmp[k] = (1.0 - 0.5 * beta) * dtfm * favg[i][k] - jmp[k];
       if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
       vnew[k] = vh[k] + jmp[k];
-      vh[k] = vnew[k] - 0.5 * jmp[k];    // the node velocity v^{n+1}
+      vh[k] = vnew[k] - 0.5 * jmp[k];      // the node velocity v^{n+1}
       jmp[k] = 2.0 * (vnew[k] - vh[k]);    // so that v^{n+1} + [v]/2 gives v^{n+3/2} back
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist) fhist[i][k] = favg[i][k];

@@ -138,8 +138,8 @@ class FixPEJump : public Fix {
   virtual void start_scheme(const char *, bool);
   void agree_on_started();
   virtual void node_impulses();
-  virtual void open_steps();                // v^n -> v^{n+1/2} of the atoms whose step begins
-  virtual bool watch_velocities() const;    // velocities other fixes change are noticed
+  virtual void open_steps();     // v^n -> v^{n+1/2} of the atoms whose step begins
+  bool watch(int when) const;    // other fixes may change velocities then (OtherFixes hooks)
   virtual PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
   void refresh_start_nodes();
   double inverse_mass_of(int) const;

@@ -279,15 +279,15 @@ void FixPEJumpAsync::assign_buffer()
 /* ----------------------------------------------------------------------
    fix pe_jump takes a velocity that another fix changed as an impulse;
    here a slow atom has no node velocity inside a coarse step, so such
-   changes are refused. All atoms are checked every fine step (before
-   their steps begin, and before they jump), and the ranks agree on the
-   outcome at coarse nodes.
+   changes are refused. The atoms on the fine clock are checked every fine
+   step (before their steps begin, and before they jump), all atoms at
+   coarse nodes, where the ranks agree on the outcome.
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::node_impulses()
 {
-  if (!watch_velocities()) return;
-  note_velocity_changes();
+  if (!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) return;
+  if (watch(OtherFixes::BETWEEN_STEPS)) note_velocity_changes(fine_index ? &fast_atoms : nullptr);
   if (fine_index) return;
   int any = 0;
   MPI_Allreduce(&changes_seen, &any, 1, MPI_INT, MPI_MAX, world);
@@ -301,18 +301,11 @@ void FixPEJumpAsync::node_impulses()
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJumpAsync::note_velocity_changes()
+void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
 {
-  for_atoms(nullptr, [&](int i) {
+  for_atoms(only, [&](int i) {
     if (velocity_changed(i)) changes_seen = 1;
   });
-}
-
-/* ---------------------------------------------------------------------- */
-
-bool FixPEJumpAsync::watch_velocities() const
-{
-  return others->may_change_velocities(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
 }
 
 /* ----------------------------------------------------------------------
@@ -324,7 +317,7 @@ void FixPEJumpAsync::open_steps()
 {
   double **v = atom->v;
   double **jump = field(JUMP);
-  const bool mark = watch_velocities();
+  const bool mark = watch(OtherFixes::INSIDE_STEP);
   for (const int i : fast_atoms) {
     for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
     if (mark) mark_velocity(i);
@@ -716,7 +709,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 
 void FixPEJumpAsync::final_integrate()
 {
-  if (watch_velocities()) note_velocity_changes();
+  if (watch(OtherFixes::INSIDE_STEP)) note_velocity_changes(&fast_atoms);
   grow_work();
   if (nmax_coarse < atom->nmax) {
     nmax_coarse = atom->nmax;
@@ -754,7 +747,7 @@ void FixPEJumpAsync::final_integrate()
   double **fstart = keep_start ? field(FSTART) : nullptr;
   double **facc = field(FACC);
   double *tpos = state->val(TPOS);
-  const bool mark = watch_velocities();
+  const bool mark = watch(OtherFixes::BETWEEN_STEPS);
   double **favg = direct ? f : fsum;
   // per clock: largest |v|^2, |[v]|^2; the slow atoms' change only at
   // coarse nodes

@@ -117,8 +117,7 @@ class FixPEJumpAsync : public FixPEJump {
   bool can_reverse() const override;
 
   bigint topology_count() const;
-  void note_velocity_changes();
-  bool watch_velocities() const override;
+  void note_velocity_changes(const AtomList *);
   void open_steps() override;
   PEJump::FreeFlight free_flight() const override;
   void check_clocks();
