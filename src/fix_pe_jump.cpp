@@ -116,7 +116,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   force_reneighbor = 1;
   next_reneighbor = -1;
 
-  started = reinit_pending = 0;
+  started = reinit_pending = opened_ahead = 0;
   split_primary = use_copy = 0;
   eflag_step = vflag_step = 0;
   h_step = 0.0;
@@ -258,6 +258,7 @@ void FixPEJump::setup(int /*vflag*/)
   state->ensure(atom->nlocal);
   grow_work();
   guard->start_run();
+  opened_ahead = 0;
   evals_step = 0.0;
   agree_on_started();
   if (!started) {
@@ -301,6 +302,12 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   reinit_pending = 0;
 
   h_step = update->dt;
+  if (opened_ahead) {
+    // the last step already began this one (nothing looked in between)
+    check_lists();
+    opened_ahead = 0;
+    return;
+  }
   node_impulses();
   open_steps();
   if (steps->keeps_history()) {
@@ -587,7 +594,9 @@ void FixPEJump::final_integrate()
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   double mag[2] = {0.0, 0.0};
-  finish_step(nullptr, favg, rest, mag);
+  const double ahead = may_open_ahead() ? rule->node[rule->primary()] * update->dt : -1.0;
+  finish_step(nullptr, favg, rest, mag, ahead);
+  opened_ahead = (ahead >= 0.0);
   guard->set_stats(mag[0], mag[1]);
 
   if (rest != 0.0) tally_at_node();
@@ -606,7 +615,8 @@ void FixPEJump::final_integrate()
    |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for the stability guard
 ------------------------------------------------------------------------- */
 
-void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, double *mag)
+void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, double *mag,
+                            double ahead)
 {
   double **x = atom->x;
   double **v = atom->v;
@@ -645,6 +655,11 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
       vnew[k] = vh[k] + jmp[k];
       vh[k] = vnew[k] - 0.5 * jmp[k];      // the node velocity v^{n+1}
       jmp[k] = 2.0 * (vnew[k] - vh[k]);    // so that v^{n+1} + [v]/2 gives v^{n+3/2} back
+      if (ahead >= 0.0) {
+        // the next step's open_steps() and advance(), in the same operations
+        vh[k] += 0.5 * jmp[k];
+        x[i][k] += ahead * vh[k];
+      }
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
@@ -655,6 +670,19 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   for_atoms(only, one);
   mag[0] = vv;
   mag[1] = jj;
+}
+
+/* ----------------------------------------------------------------------
+   true if the next step can begin as this one ends (finish_step() moves
+   the atoms on to its primary node): a single-node rule without split or
+   step-size history, nothing that looks at the atoms or may change their
+   velocities in between, lists checked by distance
+------------------------------------------------------------------------- */
+
+bool FixPEJump::may_open_ahead() const
+{
+  return (rule->size() == 1) && !split_primary && !steps->keeps_history() && neighbor->dist_check &&
+      !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) && !others->step_observed();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -993,6 +1021,11 @@ void FixPEJump::check_excursion(double lo, double hi)
   const double cp = rule->node[rule->primary()] * h_step;
   const bool primary_only = (lo == cp) && (hi == cp);
   double **xhold = (neighbor->dist_check && !primary_only) ? neighbor->get_xhold() : nullptr;
+  if (opened_ahead) {
+    // the atoms are at the primary node already: measure the nodes from there
+    lo -= cp;
+    hi -= cp;
+  }
 
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
   if (guard->has_stats()) {

@@ -123,6 +123,7 @@ class FixPEJump : public Fix {
 
   int started;               // 1 once the two-step state is valid
   int reinit_pending;        // redo the initial kick when all fix forces are in
+  int opened_ahead;          // the last step began this one already
   int split_primary;         // 1 if forces not integrated by the rule act as impulses
   int use_copy;              // split by copying f before reverse communication
   int fresh_atoms;           // 1 if atoms were created since the last setup (this rank)
@@ -181,7 +182,11 @@ class FixPEJump : public Fix {
   // v becomes the node velocity v^{n+1} = v^{n+3/2} - [v]^{n+1}/2.
   // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
   void jump_atom(int i, double h, const double *favg, double *mag);
-  void finish_step(const AtomList *only, double **favg, double rest, double *mag);
+  // ahead >= 0: also begin the next step (see may_open_ahead()) and move
+  // on to its primary node, ahead after the step end
+  void finish_step(const AtomList *only, double **favg, double rest, double *mag,
+                   double ahead = -1.0);
+  bool may_open_ahead() const;
 
   // hooks for derived styles
   virtual double kick_step(int) const;               // step size of the initial kick of an atom
