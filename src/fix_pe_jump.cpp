@@ -204,6 +204,12 @@ void FixPEJump::init()
 
   others->sort(*sampler);
   maxexchange = state->values();
+  // 1/m per type, as the jump loops take it (a division per atom costs
+  // more than the rest of the update)
+  inverse_mass.assign(atom->ntypes + 1, 0.0);
+  if (atom->mass)
+    for (int t = 1; t <= atom->ntypes; t++)
+      if (atom->mass[t] > 0.0) inverse_mass[t] = 1.0 / atom->mass[t];
 
   // forces that the rule does not integrate (other fixes that add forces,
   // contributions left out by sample) act as impulses at the primary node:
@@ -533,7 +539,7 @@ AtomSet FixPEJump::group_atoms(const AtomList *only) const
 
 double FixPEJump::inverse_mass_of(int i) const
 {
-  return atom->rmass ? 1.0 / atom->rmass[i] : 1.0 / atom->mass[atom->type[i]];
+  return atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]];
 }
 
 /* ----------------------------------------------------------------------
@@ -594,9 +600,11 @@ void FixPEJump::final_integrate()
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   double mag[2] = {0.0, 0.0};
-  const double ahead = may_open_ahead() ? rule->node[rule->primary()] * update->dt : -1.0;
-  finish_step(nullptr, favg, rest, mag, ahead);
-  opened_ahead = (ahead >= 0.0);
+  opened_ahead = may_open_ahead();
+  if (opened_ahead)
+    finish_and_open(favg, rest, rule->node[rule->primary()] * update->dt, mag);
+  else
+    finish_step(nullptr, favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
 
   if (rest != 0.0) tally_at_node();
@@ -615,8 +623,7 @@ void FixPEJump::final_integrate()
    |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for the stability guard
 ------------------------------------------------------------------------- */
 
-void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, double *mag,
-                            double ahead)
+void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, double *mag)
 {
   double **x = atom->x;
   double **v = atom->v;
@@ -637,10 +644,10 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   const double beta = damping ? MIN(1.0, damp_rate * fabs(h_step)) : 0.0;
   double vv = mag[0], jj = mag[1];
   const double *rmass = atom->rmass;
-  const double *mass = atom->mass;
+  const double *minv = inverse_mass.data();
   const int *type = atom->type;
   const auto one = [&](int i) {
-    const double dtfm = kick * (1.0 / (rmass ? rmass[i] : mass[type[i]]));
+    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
     double *vh = v[i];    // v^{n+1/2} until the node velocity is set
     double *jmp = jump[i];
     if (centre_kick)
@@ -648,18 +655,11 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
     for (int k = 0; k < 3; k++) x[i][k] += rest * vh[k];
     if (beta > 0.0)
       for (int k = 0; k < 3; k++) jmp[k] *= 1.0 - beta;
+    if (end_kick)
+      for (int k = 0; k < 3; k++) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
     double vnew[3];
     for (int k = 0; k < 3; k++) {
-      jmp[k] = (1.0 - 0.5 * beta) * dtfm * favg[i][k] - jmp[k];
-      if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
-      vnew[k] = vh[k] + jmp[k];
-      vh[k] = vnew[k] - 0.5 * jmp[k];      // the node velocity v^{n+1}
-      jmp[k] = 2.0 * (vnew[k] - vh[k]);    // so that v^{n+1} + [v]/2 gives v^{n+3/2} back
-      if (ahead >= 0.0) {
-        // the next step's open_steps() and advance(), in the same operations
-        vh[k] += 0.5 * jmp[k];
-        x[i][k] += ahead * vh[k];
-      }
+      vnew[k] = jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
@@ -668,6 +668,45 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
     jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
   };
   for_atoms(only, one);
+  mag[0] = vv;
+  mag[1] = jj;
+}
+
+/* ----------------------------------------------------------------------
+   finish_step() for all atoms of the group without impulses, damping,
+   start nodes or history, then the next step's open_steps() and advance()
+   by ahead, in the same operations as those three in turn
+------------------------------------------------------------------------- */
+
+void FixPEJump::finish_and_open(double **favg, double rest, double ahead, double *mag)
+{
+  double **x = atom->x;
+  double **v = atom->v;
+  double **jump = field(JUMP);
+  const int *mask = atom->mask;
+  const double *rmass = atom->rmass;
+  const int *type = atom->type;
+  const int nlocal = atom->nlocal;
+  const double kick = 2.0 * h_step * force->ftm2v;
+  const double *minv = inverse_mass.data();
+  double vv = mag[0], jj = mag[1];
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
+    double vh[3] = {v[i][0], v[i][1], v[i][2]};
+    double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
+    double vnew[3];
+    for (int k = 0; k < 3; k++) {
+      const double xk = x[i][k] + rest * vh[k];
+      vnew[k] = jump_component(dtfm * favg[i][k], vh[k], jmp[k]);
+      vh[k] += 0.5 * jmp[k];
+      x[i][k] = xk + ahead * vh[k];
+      v[i][k] = vh[k];
+      jump[i][k] = jmp[k];
+    }
+    vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
+    jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
+  }
   mag[0] = vv;
   mag[1] = jj;
 }
@@ -693,12 +732,7 @@ void FixPEJump::jump_atom(int i, double h, const double *favg, double *mag)
   double *v = atom->v[i];
   double *jmp = field(JUMP)[i];
   double vnew[3];
-  for (int k = 0; k < 3; k++) {
-    jmp[k] = dtfm * favg[k] - jmp[k];
-    vnew[k] = v[k] + jmp[k];
-    v[k] = vnew[k] - 0.5 * jmp[k];
-    jmp[k] = 2.0 * (vnew[k] - v[k]);
-  }
+  for (int k = 0; k < 3; k++) vnew[k] = jump_component(dtfm * favg[k], v[k], jmp[k]);
   mag[0] = MAX(mag[0], vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
   mag[1] = MAX(mag[1], jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
 }

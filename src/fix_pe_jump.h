@@ -103,6 +103,19 @@ class FixPEJump : public Fix {
   int JUMP, VSIG, FSTART;
   double **field(int which) const;
   static double fingerprint(const double *v);
+
+  // one component of the two-step update: with vh = v^{n+1/2} and jmp =
+  // [v]^n on entry and dfavg = 2 h <F>/m, vh becomes the node velocity
+  // v^{n+1} and jmp the jump [v]^{n+1}, stored as 2 (v^{n+3/2} - v^{n+1}) so
+  // that v^{n+1} + jmp/2 gives v^{n+3/2} back; returns v^{n+3/2}
+  static double jump_component(double dfavg, double &vh, double &jmp)
+  {
+    jmp = dfavg - jmp;
+    const double vnew = vh + jmp;
+    vh = vnew - 0.5 * jmp;
+    jmp = 2.0 * (vnew - vh);
+    return vnew;
+  }
   bool velocity_changed(int i) const;
   void mark_velocity(int i);
 
@@ -144,6 +157,7 @@ class FixPEJump : public Fix {
   virtual PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
   void refresh_start_nodes();
   double inverse_mass_of(int) const;
+  std::vector<double> inverse_mass;    // per atom type, set in init()
   void primary_sampled_force();
   void project_sampled();
   void quadrature_sum();
@@ -182,10 +196,8 @@ class FixPEJump : public Fix {
   // v becomes the node velocity v^{n+1} = v^{n+3/2} - [v]^{n+1}/2.
   // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
   void jump_atom(int i, double h, const double *favg, double *mag);
-  // ahead >= 0: also begin the next step (see may_open_ahead()) and move
-  // on to its primary node, ahead after the step end
-  void finish_step(const AtomList *only, double **favg, double rest, double *mag,
-                   double ahead = -1.0);
+  void finish_step(const AtomList *only, double **favg, double rest, double *mag);
+  void finish_and_open(double **favg, double rest, double ahead, double *mag);
   bool may_open_ahead() const;
 
   // hooks for derived styles
