@@ -945,10 +945,16 @@ void FixPEJump::quadrature_sum()
 
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
+  // with a Lobatto rule the total force at the primary node (the step end)
+  // is needed afterwards only for the impulses of forces outside the rule,
+  // or if something looks at it (it is then fsample again)
+  const bool keep_forces = split_primary || node_select || !reuse_start;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
-                       group_atoms(node_select), opts.sample_mask, fsum, nullptr);
+                       group_atoms(node_select), opts.sample_mask, fsum, nullptr, keep_forces);
   evals_step += evaluated * node_cost();
+  if (!keep_forces && atom->nlocal && (others->step_observed() || tally_step()))
+    memcpy(&atom->f[0][0], &fsample[0][0], 3 * sizeof(double) * atom->nlocal);
 }
 
 /* ----------------------------------------------------------------------

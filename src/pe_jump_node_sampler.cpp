@@ -57,15 +57,17 @@ void NodeSampler::make_room()
    of the next force evaluation brings them up to date.
 ------------------------------------------------------------------------- */
 
-NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomList *atoms) :
-    nodes(sampler), which(positions), list(atoms)
+NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomList *atoms,
+                        bool keep_forces) :
+    nodes(sampler),
+    which(positions), list(atoms), forces(keep_forces)
 {
   if (nodes.keeping) nodes.error->one(FLERR, "Fix pe_jump: nested NodeSampler::Keep (bug)");
   nodes.keeping = true;
   nodes.make_room();
   const size_t nbytes = 3 * sizeof(double) * nodes.atom->nlocal;
   if (!nbytes) return;
-  memcpy(&nodes.fkept[0][0], &nodes.atom->f[0][0], nbytes);
+  if (forces) memcpy(&nodes.fkept[0][0], &nodes.atom->f[0][0], nbytes);
   double **x = nodes.atom->x;
   if (which == ALL_OWNED) memcpy(&nodes.xkept[0][0], &x[0][0], nbytes);
   if (which == LISTED)
@@ -85,7 +87,7 @@ NodeSampler::Keep::~Keep()
   if (which == LISTED)
     for (const int i : *list)
       for (int k = 0; k < 3; k++) x[i][k] = nodes.xkept[i][k];
-  memcpy(&nodes.atom->f[0][0], &nodes.fkept[0][0], nbytes);
+  if (forces) memcpy(&nodes.atom->f[0][0], &nodes.fkept[0][0], nbytes);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -104,9 +106,9 @@ void NodeSampler::evaluate_at(double shift, const FreeFlight &v, const AtomSet &
 
 int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double scale, double offset,
                            const FreeFlight &v, const AtomSet &set, int mask, double **acc,
-                           double **fend)
+                           double **fend, bool keep_forces)
 {
-  Keep keep(*this, set.list ? LISTED : ALL_OWNED, set.list);
+  Keep keep(*this, set.list ? LISTED : ALL_OWNED, set.list, keep_forces);
   double **f = atom->f;
   const int last = rule.size() - 1;
   int evaluated = 0;

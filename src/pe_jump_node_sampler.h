@@ -68,7 +68,8 @@ namespace PEJump {
     enum Positions { FORCES_ONLY, ALL_OWNED, LISTED };
     class Keep {
      public:
-      Keep(NodeSampler &, Positions = FORCES_ONLY, const AtomList * = nullptr);
+      // forces: false if the caller does not need the forces afterwards
+      Keep(NodeSampler &, Positions = FORCES_ONLY, const AtomList * = nullptr, bool forces = true);
       ~Keep();
       Keep(const Keep &) = delete;
       Keep &operator=(const Keep &) = delete;
@@ -77,6 +78,7 @@ namespace PEJump {
       NodeSampler &nodes;
       Positions which;
       const AtomList *list;
+      bool forces;
     };
 
     // move the atoms of set to x + shift v and compute the contributions in
@@ -85,10 +87,12 @@ namespace PEJump {
 
     // acc += sum_k w_k F(q_k) over the nodes k = first .. last of rule but
     // skip, q_k = x + (scale c_k + offset) v for the atoms of set (the others
-    // stay); fend (if given) gets the forces at the last node. Positions and
-    // forces are put back. Returns the number of nodes evaluated.
+    // stay); fend (if given) gets the forces at the last node. Positions
+    // are put back, and forces unless keep_forces is false (then the last
+    // node's are left). Returns the number of nodes evaluated.
     int sum_nodes(const Quadrature &rule, int first, int skip, double scale, double offset,
-                  const FreeFlight &v, const AtomSet &set, int mask, double **acc, double **fend);
+                  const FreeFlight &v, const AtomSet &set, int mask, double **acc, double **fend,
+                  bool keep_forces = true);
 
     ForceSampler *forces() const { return sampler; }
     double memory_usage() const;
