@@ -646,20 +646,20 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   const double *rmass = atom->rmass;
   const double *minv = inverse_mass.data();
   const int *type = atom->type;
+  // per atom in registers (the arrays may alias for all the compiler knows)
   const auto one = [&](int i) {
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
-    double *vh = v[i];    // v^{n+1/2} until the node velocity is set
-    double *jmp = jump[i];
-    if (centre_kick)
-      for (int k = 0; k < 3; k++) vh[k] += 0.5 * dtfm * (f[i][k] - fsample[i][k]);
-    for (int k = 0; k < 3; k++) x[i][k] += rest * vh[k];
-    if (beta > 0.0)
-      for (int k = 0; k < 3; k++) jmp[k] *= 1.0 - beta;
-    if (end_kick)
-      for (int k = 0; k < 3; k++) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
+    double vh[3] = {v[i][0], v[i][1], v[i][2]};    // v^{n+1/2}
+    double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
     double vnew[3];
     for (int k = 0; k < 3; k++) {
+      if (centre_kick) vh[k] += 0.5 * dtfm * (f[i][k] - fsample[i][k]);
+      x[i][k] += rest * vh[k];
+      if (beta > 0.0) jmp[k] *= 1.0 - beta;
+      if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
       vnew[k] = jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
+      v[i][k] = vh[k];
+      jump[i][k] = jmp[k];
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
@@ -1060,7 +1060,15 @@ void FixPEJump::check_excursion(double lo, double hi)
 {
   const double cp = rule->node[rule->primary()] * h_step;
   const bool primary_only = (lo == cp) && (hi == cp);
-  double **xhold = (neighbor->dist_check && !primary_only) ? neighbor->get_xhold() : nullptr;
+  // Lobatto rules: the nodes lie between q^n and q^{n+1} (the primary
+  // node), whose distances from the last build LAMMPS checks if it checks
+  // every step; the largest distance of x + t v over t in [0, h] is at one
+  // of the ends, and after a build at q^{n+1} the nodes are within one step
+  // length (bounded by the guard) of it
+  const bool ends_checked = rule->has_end_nodes() && (neighbor->every == 1) &&
+      (neighbor->delay == 0) && (lo >= 0.0) && (hi <= h_step);
+  double **xhold = (neighbor->dist_check && !primary_only && !ends_checked) ? neighbor->get_xhold()
+                                                                            : nullptr;
   if (opened_ahead) {
     // the atoms are at the primary node already: measure the nodes from there
     lo -= cp;
