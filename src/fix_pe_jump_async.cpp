@@ -38,6 +38,7 @@
 #include "neighbor.h"
 #include "output.h"
 #include "pair.h"
+#include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_interaction_split.h"
@@ -53,6 +54,7 @@
 
 using namespace LAMMPS_NS;
 using namespace FixConst;
+using PEJump::AsyncClocks;
 using PEJump::AtomState;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
@@ -65,12 +67,12 @@ static constexpr int NASYNC_GLOBAL = 6;    // K, fine step index, elapsed time, 
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
-    FixPEJump(lmp, narg, arg, 5, true), nfine(1), finebit(0), clockbit(0), fine_index(0),
-    elapsed(0.0), reverse_flags(nullptr), split_calls(-1), topology_at_setup(0), changes_seen(0),
-    saved_buffer(-1), split(nullptr), tnow(0.0), fcoarse(nullptr), nmax_coarse(0)
+    FixPEJump(lmp, narg, arg, 5, true), finebit(0), clockbit(0), reverse_flags(nullptr),
+    split_calls(-1), topology_at_setup(0), changes_seen(0), saved_buffer(-1), split(nullptr),
+    clocks(nullptr), fcoarse(nullptr), nmax_coarse(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
-  nfine = utils::inumeric(FLERR, arg[3], false, lmp);
+  const int nfine = utils::inumeric(FLERR, arg[3], false, lmp);
   if (nfine < 1) error->all(FLERR, "Fix pe_jump/async needs K >= 1 fine steps per coarse step");
   const int ifast = group->find(arg[4]);
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
@@ -108,7 +110,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   FACC = state->add("facc", 3, 0.0);
   FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
   KLASS = state->add("klass", 1, OUTSIDE);
-  TPOS = state->add("tpos", 1, CURRENT);
+  clocks = new AsyncClocks(lmp, *state, nfine);
   for (int i = 0; i < atom->nlocal; i++) FixPEJumpAsync::set_arrays(i);
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -129,6 +131,7 @@ void FixPEJumpAsync::post_constructor()
 
 FixPEJumpAsync::~FixPEJumpAsync()
 {
+  delete clocks;
   delete split;
   memory->destroy(fcoarse);
 }
@@ -287,8 +290,9 @@ void FixPEJumpAsync::assign_buffer()
 void FixPEJumpAsync::node_impulses()
 {
   if (!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) return;
-  if (watch(OtherFixes::BETWEEN_STEPS)) note_velocity_changes(fine_index ? &fast_atoms : nullptr);
-  if (fine_index) return;
+  if (watch(OtherFixes::BETWEEN_STEPS))
+    note_velocity_changes(clocks->at_coarse_node() ? nullptr : &fast_atoms);
+  if (!clocks->at_coarse_node()) return;
   int any = 0;
   MPI_Allreduce(&changes_seen, &any, 1, MPI_INT, MPI_MAX, world);
   if (any)
@@ -379,7 +383,6 @@ void FixPEJumpAsync::find_moving()
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  double *tpos = state->val(TPOS);
   moving.resize(nlocal);
   moving_atoms.clear();
   fast_atoms.clear();
@@ -391,12 +394,12 @@ void FixPEJumpAsync::find_moving()
     if (moving[i]) {
       moving_atoms.push_back(i);
       (slow[i] ? slow_moving : fast_atoms).push_back(i);
-      if (tpos[i] != CURRENT) {
-        catch_up(i);
+      if (clocks->times()[i] != AsyncClocks::MOVING) {
+        clocks->catch_up(i, free_flight(), true);
         caught = 1;
       }
-    } else if (tpos[i] == CURRENT) {
-      tpos[i] = tnow;    // stays here until it is needed
+    } else {
+      clocks->hold(i);    // stays here until it is needed
     }
   }
   int any = 0;
@@ -428,27 +431,11 @@ void FixPEJumpAsync::slow_magnitudes()
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJumpAsync::catch_up(int i)
-{
-  double **x = atom->x;
-  double **v = atom->v;
-  double **jump = field(JUMP);
-  double *tpos = state->val(TPOS);
-  const double lag = tnow - tpos[i];
-  // only slow atoms lag: their free-flight velocity is v^n + [v]^n/2
-  if (lag != 0.0)
-    for (int k = 0; k < 3; k++) x[i][k] += lag * (v[i][k] + 0.5 * jump[i][k]);
-  tpos[i] = moving[i] ? CURRENT : tnow;
-}
-
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::catch_up_all()
 {
-  const int nlocal = atom->nlocal;
-  const double *tpos = state->val(TPOS);
-  for (int i = 0; i < nlocal; i++)
-    if (tpos[i] != CURRENT) catch_up(i);
+  clocks->catch_up_all(free_flight(), moving.data());
 }
 
 /* ----------------------------------------------------------------------
@@ -461,20 +448,20 @@ void FixPEJumpAsync::advance(double t)
 {
   double **x = atom->x;
   const PEJump::FreeFlight vhalf = free_flight();
-  double *tpos = state->val(TPOS);
-  tnow = elapsed + t;
-  if (fine_index + 1 < nfine) {
+  clocks->moving_at(t);
+  if (!clocks->last_fine_step()) {
     for (const int i : moving_atoms)
       for (int k = 0; k < 3; k++) x[i][k] += t * vhalf(i, k);
     return;
   }
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
+  double *tpos = clocks->times();
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
-    const double dt = (tpos[i] == CURRENT) ? t : tnow - tpos[i];
+    const double dt = (tpos[i] == AsyncClocks::MOVING) ? t : clocks->now() - tpos[i];
     for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
-    tpos[i] = CURRENT;
+    tpos[i] = AsyncClocks::MOVING;
   }
 }
 
@@ -516,14 +503,10 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   catch_up_all();
   if (with_start) {
-    fine_index = 0;
-    elapsed = tnow = 0.0;
-    double *tpos = state->val(TPOS);
+    clocks->begin_coarse();
     double **facc = field(FACC);
-    for (int i = 0; i < atom->nlocal; i++) {
-      if (tpos[i] != CURRENT) tpos[i] = 0.0;
+    for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
-    }
   }
   FixPEJump::start_scheme(why, with_start);
 }
@@ -532,7 +515,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 
 double FixPEJumpAsync::kick_step(int i) const
 {
-  return split->coarse(i) ? nfine * update->dt : update->dt;
+  return split->coarse(i) ? clocks->steps() * update->dt : update->dt;
 }
 
 /* ----------------------------------------------------------------------
@@ -541,7 +524,7 @@ double FixPEJumpAsync::kick_step(int i) const
 
 bool FixPEJumpAsync::can_reverse() const
 {
-  return fine_index == 0;
+  return clocks->at_coarse_node();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -552,7 +535,7 @@ std::string FixPEJumpAsync::instability_advice() const
                      "their coupling at the interface, which has resonances (see the stability "
                      "section of the fix pe_jump/async documentation), is unstable: reduce the "
                      "time step or change K{}",
-                     h_step, nfine * h_step,
+                     h_step, clocks->steps() * h_step,
                      opts.buffer_layers ? ""
                                         : ", or add the keyword buffer 1 (the slow partners of "
                                           "the interface then take the fine step)");
@@ -639,8 +622,8 @@ void FixPEJumpAsync::check_lists()
   const double c_lo = rule->node[first];
   const bool tally = tally_step();
   const double c_hi = tally ? 1.0 : rule->node.back();
-  const double coarse_step = nfine * h_step;
-  const bool coarse_end = (fine_index + 1 >= nfine);
+  const double coarse_step = clocks->steps() * h_step;
+  const bool coarse_end = clocks->last_fine_step();
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
   if (!coarse_end && guard->has_stats()) {
@@ -664,11 +647,12 @@ void FixPEJumpAsync::check_lists()
   if (coarse_end) {
     // the coarse nodes q_S^n + c H v_S of the slow atoms, measured from
     // their current positions q_S^n + elapsed v_S (less their lag)
-    const double span = elapsed + h_step;
-    const double *tpos = state->val(TPOS);
+    const double elapsed = clocks->start(), span = elapsed + h_step;
+    const double *tpos = clocks->times();
     const int nlocal = atom->nlocal;
     lag.resize(nlocal);
-    for (int i = 0; i < nlocal; i++) lag[i] = (tpos[i] == CURRENT) ? 0.0 : elapsed - tpos[i];
+    for (int i = 0; i < nlocal; i++)
+      lag[i] = (tpos[i] == AsyncClocks::MOVING) ? 0.0 : elapsed - tpos[i];
     at.lo2 = c_lo * span - elapsed;
     at.hi2 = rule->node.back() * span - elapsed;
     at.lag = lag.data();
@@ -691,7 +675,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
     for (int k = 0; k < 3; k++)
       fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
   }
-  const double at = elapsed + rule->node[rule->primary()] * h_step;
+  const double at = clocks->start() + rule->node[rule->primary()] * h_step;
   split->activate(InteractionSplit::COARSE);
   const int evaluated =
       nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
@@ -717,8 +701,8 @@ void FixPEJumpAsync::final_integrate()
     memory->create(fcoarse, nmax_coarse, 3, "pe_jump/async:fcoarse");
   }
 
-  const bool coarse_end = (fine_index + 1 >= nfine);
-  const double coarse_step = elapsed + h_step;
+  const bool coarse_end = clocks->last_fine_step();
+  const double coarse_step = clocks->start() + h_step;
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the fine quadrature average itself
@@ -746,7 +730,7 @@ void FixPEJumpAsync::final_integrate()
   const PEJump::FreeFlight vhalf = free_flight();
   double **fstart = keep_start ? field(FSTART) : nullptr;
   double **facc = field(FACC);
-  double *tpos = state->val(TPOS);
+  double *tpos = clocks->times();
   const bool mark = watch(OtherFixes::BETWEEN_STEPS);
   double **favg = direct ? f : fsum;
   // per clock: largest |v|^2, |[v]|^2; the slow atoms' change only at
@@ -755,7 +739,7 @@ void FixPEJumpAsync::final_integrate()
   if (coarse_end) {
     // every atom reaches the coarse node, the slow ones jump too
     const auto coarse_node = [&](int i) {
-      const double dt = (tpos[i] == CURRENT) ? rest : coarse_step - tpos[i];
+      const double dt = (tpos[i] == AsyncClocks::MOVING) ? rest : coarse_step - tpos[i];
       for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
       if (keep_start)
         for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
@@ -773,7 +757,7 @@ void FixPEJumpAsync::final_integrate()
         jump_atom(i, coarse_step, fslow, mag[1]);
       }
       if (mark) mark_velocity(i);
-      tpos[i] = moving[i] ? CURRENT : 0.0;    // at the start of the next coarse step
+      tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
     };
     for (int i = 0; i < nlocal; i++)
       if (mask[i] & groupbit) coarse_node(i);
@@ -798,7 +782,7 @@ void FixPEJumpAsync::final_integrate()
 
   // interior slow atoms catch up wherever their positions are looked at:
   // output, other fixes at the end of the step, the end of the run
-  tnow = coarse_end ? 0.0 : coarse_step;
+  clocks->end_fine(h_step);
   if (!coarse_end && others->step_observed()) catch_up_all();
 
   split->activate(InteractionSplit::ALL);
@@ -807,16 +791,9 @@ void FixPEJumpAsync::final_integrate()
   evals_total += evals_step;
   cached_step = -1;
 
-  if (coarse_end) {
-    fine_index = 0;
-    elapsed = 0.0;
-    // the labels are output only: take them where something looks, when
-    // tally_at_node() has brought the ghosts to the node
-    if (eflag_step || vflag_step || others->step_observed()) label_classes();
-  } else {
-    ++fine_index;
-    elapsed = coarse_step;
-  }
+  // the labels are output only: take them where something looks, when
+  // tally_at_node() has brought the ghosts to the node
+  if (coarse_end && (eflag_step || vflag_step || others->step_observed())) label_classes();
 }
 
 /* ----------------------------------------------------------------------
@@ -910,7 +887,7 @@ double FixPEJumpAsync::compute_vector(int n)
 {
   switch (n) {
     case 5:
-      return (fine_index == 0) ? 1.0 : 0.0;
+      return clocks->at_coarse_node() ? 1.0 : 0.0;
     case 6:
     case 7:
     case 8:
@@ -978,9 +955,7 @@ void FixPEJumpAsync::write_restart(FILE *fp)
 {
   double list[NGLOBAL + NASYNC_GLOBAL];
   global_state(list);
-  list[NGLOBAL] = nfine;
-  list[NGLOBAL + 1] = fine_index;
-  list[NGLOBAL + 2] = elapsed;
+  clocks->save(&list[NGLOBAL]);
   list[NGLOBAL + 3] = saved_buffer;
   list[NGLOBAL + 4] = saved_clock[0];
   list[NGLOBAL + 5] = saved_clock[1];
@@ -997,7 +972,7 @@ void FixPEJumpAsync::restart(char *buf)
 {
   FixPEJump::restart(buf);
   auto *list = reinterpret_cast<double *>(buf);
-  if (static_cast<int>(list[NGLOBAL]) != nfine) {
+  if (!clocks->restore(&list[NGLOBAL])) {
     if (started && (comm->me == 0))
       utils::logmesg(lmp,
                      "Fix {}: K differs from the restart file: the two-step scheme restarts "
@@ -1006,8 +981,6 @@ void FixPEJumpAsync::restart(char *buf)
     started = 0;
     return;
   }
-  fine_index = static_cast<int>(list[NGLOBAL + 1]);
-  elapsed = tnow = list[NGLOBAL + 2];
   saved_buffer = static_cast<int>(list[NGLOBAL + 3]);
   saved_clock[0] = list[NGLOBAL + 4];
   saved_clock[1] = list[NGLOBAL + 5];
@@ -1037,12 +1010,12 @@ void FixPEJumpAsync::check_clocks()
   saved_clock[0] = clock[0];
   saved_clock[1] = clock[1];
   if (!started || !changed) return;
-  if (fine_index != 0)
+  if (!clocks->at_coarse_node())
     error->all(FLERR,
                "Fix pe_jump/async: the atoms on the fine clock changed inside a coarse step "
                "({} of {} fine steps done): change the fast group, or the buffer, only at a "
                "coarse node (after a multiple of K steps)",
-               fine_index, nfine);
+               clocks->done(), clocks->steps());
   if (comm->me == 0)
     utils::logmesg(lmp,
                    "Fix {}: the atoms on the fine clock changed since the last run: restarting "

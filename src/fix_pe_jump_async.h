@@ -28,8 +28,9 @@ FixStyle(pe_jump/async,FixPEJumpAsync);
 
 namespace LAMMPS_NS {
 namespace PEJump {
+  class AsyncClocks;
   class InteractionSplit;
-}
+}    // namespace PEJump
 
 class FixPEJumpAsync : public FixPEJump {
  public:
@@ -64,12 +65,9 @@ class FixPEJumpAsync : public FixPEJump {
  protected:
   enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
 
-  int nfine;                          // K: fine steps per coarse step
   int finebit;                        // group bit of the fast group
   std::string fast_group;             // its name, looked up again in init()
   int clockbit;                       // group bit of the atoms on the fine clock
-  int fine_index;                     // fine steps done in the current coarse step
-  double elapsed;                     // time elapsed in the current coarse step
   double counts[3];                   // global number of slow, mixed, fast atoms
   double stats_slow[2];               // largest |v|^2, |[v]|^2 of the local slow atoms
   std::vector<int> *reverse_flags;    // reverse communication carries these flags
@@ -80,19 +78,13 @@ class FixPEJumpAsync : public FixPEJump {
   double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
 
   PEJump::InteractionSplit *split;
+  PEJump::AsyncClocks *clocks;
 
   // per-atom state fields: the quadrature sum of the forces on slow atoms
   // over the fine steps done in this coarse step (force x time), (Lobatto
-  // rules) the slow-interaction force at the coarse start node, the class,
-  // and tpos: the time within the coarse step an atom's position belongs
-  // to, or CURRENT if it moves with the fine steps. Slow atoms that take
-  // part in no fine interaction (interior ones) do not move on fine steps
-  // but catch up with their free flight at the coarse node (or when they
-  // join a fine interaction, or are looked at). tnow: the time within the
-  // coarse step of the atoms that move
-  int FACC, FSTART_COARSE, KLASS, TPOS;
-  double tnow;
-  static constexpr double CURRENT = -1.0;
+  // rules) the slow-interaction force at the coarse start node, and the
+  // class (the clocks add the time of each atom's position)
+  int FACC, FSTART_COARSE, KLASS;
 
   double **fcoarse;    // work: coarse quadrature sum of the slow interactions
   int nmax_coarse;
@@ -125,9 +117,8 @@ class FixPEJumpAsync : public FixPEJump {
   void find_slow();
   void find_moving();
   void slow_magnitudes();
-  void catch_up(int i);
   void show_classes();    // vector_atom follows the state table
-  void catch_up_all();
+  void catch_up_all();    // the atoms that sit out fine steps catch up
   void coarse_quadrature_sum(double coarse_step);
   void label_classes();
   void gather_flags(std::vector<int> &);
