@@ -33,6 +33,7 @@
 #include "output.h"
 #include "pair.h"
 #include "pe_jump_atom_state.h"
+#include "pe_jump_auto_quadrature.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_options.h"
@@ -52,7 +53,6 @@ using namespace FixConst;
 using PEJump::AtomSet;
 using PEJump::AtomState;
 using PEJump::ForceSampler;
-using PEJump::NestedLobatto;
 using PEJump::NodeSampler;
 using PEJump::OtherFixes;
 using PEJump::Quadrature;
@@ -68,16 +68,13 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 /* ---------------------------------------------------------------------- */
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool two_clocks) :
-    Fix(lmp, narg, arg), rule(nullptr), nested(nullptr), sampler(nullptr), nodes(nullptr),
+    Fix(lmp, narg, arg), rule(nullptr), automatic(nullptr), sampler(nullptr), nodes(nullptr),
     state(nullptr), steps(nullptr), guard(nullptr), others(nullptr), fsum(nullptr),
-    fsample(nullptr), fnode(nullptr), nmax_work(0), node_select(nullptr)
+    fsample(nullptr), nmax_work(0), node_select(nullptr)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
   opts.parse(lmp, style, narg, arg, first_keyword, two_clocks);
-  auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
-  id_pe = nullptr;
-  vprev = 0.0;
 
   rule = new Quadrature(static_cast<Quadrature::Family>(opts.family), opts.npoints);
   sampler = new ForceSampler(lmp);
@@ -88,8 +85,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   if (opts.auto_tol > 0.0) {
     if (opts.sample_mask != ForceSampler::ALL)
       error->all(FLERR, "Fix {} quadrature auto samples all force contributions", style);
-    id_pe = utils::strdup(std::string(id) + "_pe");
-    nested = new NestedLobatto();
+    automatic = new PEJump::AutoQuadrature(lmp, id, opts.auto_tol);
   }
 
   // the per-atom state; step control adds the force history it needs
@@ -143,7 +139,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 
 void FixPEJump::post_constructor()
 {
-  if (id_pe) modify->add_compute(fmt::format("{} all pe", id_pe));
+  if (automatic) automatic->create_compute();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -156,9 +152,6 @@ FixPEJump::~FixPEJump()
   }
   memory->destroy(fsum);
   memory->destroy(fsample);
-  memory->destroy(fnode);
-  if (id_pe && modify->get_compute_by_id(id_pe)) modify->delete_compute(id_pe);
-  delete[] id_pe;
   delete[] extlist;
   delete steps;
   delete state;
@@ -166,7 +159,7 @@ FixPEJump::~FixPEJump()
   delete guard;
   delete nodes;
   delete sampler;
-  delete nested;
+  delete automatic;
   delete rule;
 }
 
@@ -221,7 +214,7 @@ void FixPEJump::init()
   split_primary = others->add_forces() || ((opts.sample_mask & present) != present);
   use_copy = split_primary && ((opts.sample_mask & present) == present);
   const bool centre = split_primary && (rule->family() == Quadrature::LEGENDRE) &&
-      (rule->points() % 2 == 0) && !nested;
+      (rule->points() % 2 == 0) && !automatic;
   if (centre != (rule->size() != rule->points())) {
     auto *other = new Quadrature(rule->family(), rule->points(), centre);
     delete rule;
@@ -238,8 +231,7 @@ void FixPEJump::init()
     damp_rate = 1.0 / (AUTO_DAMP_STEPS * update->dt);
   damping = (opts.damp_time > 0.0) || ((opts.damp_time < 0.0) && others->add_forces());
   impulse_local = 0;
-  if (id_pe && !modify->get_compute_by_id(id_pe))
-    error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
+  if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
@@ -284,10 +276,7 @@ void FixPEJump::setup(int /*vflag*/)
   fresh_atoms = 0;
   if (!nodes_at_step_ends(*rule)) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pseudo_energy_now());
-  if (nested) {
-    vprev = potential_now(opts.sample_mask);
-    modify->get_compute_by_id(id_pe)->addstep(update->ntimestep + 1);
-  }
+  if (automatic) automatic->start_run(*nodes, opts.sample_mask);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -767,12 +756,7 @@ void FixPEJump::post_run()
     mark_velocity(i);
   });
 
-  if (nested && (comm->me == 0))
-    utils::logmesg(lmp,
-                   "Fix {} quadrature auto {}: steps with lobatto 2: {}, lobatto 3: {}, "
-                   "lobatto 5: {}\n",
-                   style, opts.auto_tol, auto_steps[0], auto_steps[1], auto_steps[2]);
-  auto_steps[0] = auto_steps[1] = auto_steps[2] = 0;
+  if (automatic) automatic->report(style);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -921,7 +905,7 @@ void FixPEJump::refresh_start_nodes()
 
 void FixPEJump::quadrature_sum()
 {
-  if (nested) {
+  if (automatic) {
     auto_quadrature_sum();
     return;
   }
@@ -958,88 +942,22 @@ void FixPEJump::quadrature_sum()
 }
 
 /* ----------------------------------------------------------------------
-   quadrature auto: the nested Gauss-Lobatto rules with 2, 3 and 5 points.
-   The start node is the previous end node, the end node the Verlet
-   evaluation, which also tallies the potential energy V(q^{n+1}) (the fix
-   requests it every step). The pseudo-energy defect of this step with rule
-   r is then known before the jump: D_r = V(q^{n+1}) - V(q^n) + h sum_i
-   v_i^{n+1/2} . I_r,i with I_r the quadrature average of the forces. The
-   step takes the first rule with |D_r| <= TOL (1, 2 or 4 evaluations),
-   else the finest. The forces at a node are kept while a finer rule still
-   uses them (the middle node): fnode.
+   quadrature auto (see PEJump::AutoQuadrature): the start node is the
+   previous end node (taken at the first evaluation of a new atom), the end
+   node the Verlet evaluation
 ------------------------------------------------------------------------- */
 
 void FixPEJump::auto_quadrature_sum()
 {
-  double **f = atom->f;
   double **fstart = field(FSTART);
-
-  primary_sampled_force();    // F(1) into fsample
+  primary_sampled_force();    // F(q^{n+1}) into fsample
   for_atoms(nullptr, [&](int i) {
     if (std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
   });
-  const double vnew = (update->eflag_global == update->ntimestep)
-      ? sampler->energy(opts.sample_mask)
-      : potential_now(opts.sample_mask);
-  const double dv = vnew - vprev;
-  vprev = vnew;
-  modify->get_compute_by_id(id_pe)->addstep(update->ntimestep + 1);
-
-  // forces at node j of a level's rule: kept ones, or evaluated now
-  const auto kept = [&](int level, int j) -> double ** {
-    const double c = nested->rule(level).node[j];
-    if (c == 0.0) return fstart;
-    if (c == 1.0) return fsample;
-    return nested->added(level, j) ? nullptr : fnode;
-  };
-  int level = 0;
-  std::unique_ptr<NodeSampler::Keep> keep;
-  while (true) {
-    const Quadrature &r = nested->rule(level);
-    const bool last = (level + 1 == nested->levels());
-    for_atoms(nullptr, [&](int i) {
-      for (int k = 0; k < 3; k++) fsum[i][k] = 0.0;
-    });
-    for (int j = 0; j < r.size(); j++) {
-      double **fj = kept(level, j);
-      if (!fj) {
-        if (!keep) keep = std::make_unique<NodeSampler::Keep>(*nodes, NodeSampler::ALL_OWNED);
-        nodes->evaluate_at((r.node[j] - 1.0) * h_step, free_flight(), group_atoms(),
-                           opts.sample_mask);
-        evals_step += node_cost();
-        fj = f;
-        if (!last) {
-          for_atoms(nullptr, [&](int i) {
-            for (int k = 0; k < 3; k++) fnode[i][k] = f[i][k];
-          });
-        }
-      }
-      const double w = r.weight[j];
-      for_atoms(nullptr, [&](int i) {
-        for (int k = 0; k < 3; k++) fsum[i][k] += w * fj[i][k];
-      });
-    }
-    if (last || (auto_defect(dv) <= opts.auto_tol)) break;
-    ++level;
-  }
-  keep.reset();
-  ++auto_steps[level];
-}
-
-/* ----------------------------------------------------------------------
-   defect of the rule whose quadrature average is in fsum
-------------------------------------------------------------------------- */
-
-double FixPEJump::auto_defect(double dv) const
-{
-  double **vhalf = atom->v;
-  double local = 0.0, global = 0.0;
-  for_atoms(nullptr, [&](int i) {
-    local += vhalf[i][0] * fsum[i][0] + vhalf[i][1] * fsum[i][1] + vhalf[i][2] * fsum[i][2];
-  });
-  MPI_Allreduce(&local, &global, 1, MPI_DOUBLE, MPI_SUM, world);
-  return fabs(dv + h_step * global);
+  const int evaluated = automatic->sum(*nodes, opts.sample_mask, group_atoms(), free_flight(),
+                                       h_step, fstart, fsample, fsum);
+  evals_step += evaluated * node_cost();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1196,9 +1114,7 @@ double FixPEJump::pseudo_energy_now()
 
 double FixPEJump::potential_now(int mask)
 {
-  NodeSampler::Keep keep(*nodes);
-  sampler->compute(mask, ENERGY_GLOBAL, 0);
-  return sampler->energy(mask);
+  return nodes->potential(mask);
 }
 
 /* ----------------------------------------------------------------------
@@ -1263,14 +1179,12 @@ void FixPEJump::grow_work()
   const int need = use_copy ? atom->nlocal + atom->nghost : atom->nlocal;
   if (need <= nmax_work) return;
   nmax_work = need + need / 16 + 64;
-  const bool sum = (rule->size() > 1) || split_primary || steps->keeps_history() || nested;
-  const bool sample = split_primary || rule->has_end_nodes() || nested;
+  const bool sum = (rule->size() > 1) || split_primary || steps->keeps_history() || automatic;
+  const bool sample = split_primary || rule->has_end_nodes() || automatic;
   memory->destroy(fsum);
   memory->destroy(fsample);
-  memory->destroy(fnode);
   if (sum) memory->create(fsum, nmax_work, 3, "pe_jump:fsum");
   if (sample) memory->create(fsample, nmax_work, 3, "pe_jump:fsample");
-  if (nested) memory->create(fnode, nmax_work, 3, "pe_jump:fnode");
 }
 
 /* ----------------------------------------------------------------------
@@ -1431,7 +1345,8 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
 
 double FixPEJump::memory_usage()
 {
-  const int arrays = (fsum ? 1 : 0) + (fsample ? 1 : 0) + (fnode ? 1 : 0);
+  const int arrays = (fsum ? 1 : 0) + (fsample ? 1 : 0);
   return state->memory_usage() + nodes->memory_usage() +
+      (automatic ? automatic->memory_usage() : 0.0) +
       static_cast<double>(nmax_work) * 3 * sizeof(double) * arrays;
 }

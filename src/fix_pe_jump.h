@@ -30,7 +30,7 @@ namespace LAMMPS_NS {
 namespace PEJump {
   class AtomState;
   class ForceSampler;
-  class NestedLobatto;
+  class AutoQuadrature;
   class NodeSampler;
   class OtherFixes;
   class Quadrature;
@@ -87,7 +87,7 @@ class FixPEJump : public Fix {
   // force evaluation, node sampling, per-atom state, step control, the
   // stability guard, and what other fixes do
   PEJump::Quadrature *rule;
-  PEJump::NestedLobatto *nested;
+  PEJump::AutoQuadrature *automatic;    // quadrature auto, or nullptr
   PEJump::ForceSampler *sampler;
   PEJump::NodeSampler *nodes;
   PEJump::AtomState *state;
@@ -120,9 +120,6 @@ class FixPEJump : public Fix {
   void mark_velocity(int i);
 
   PEJump::Options opts;    // the keywords
-  bigint auto_steps[3];    // quadrature auto: steps with each rule
-  char *id_pe;             // compute pe that requests the energy at every step (auto)
-  double vprev;            // potential energy at the start of the step (auto)
   double damp_rate;        // 1/damping time
   int damping;             // 1 if the parasitic mode is damped now
   int impulse_local;       // another fix changed a velocity in this step (this rank)
@@ -130,7 +127,6 @@ class FixPEJump : public Fix {
   // per-step work arrays (not migrated), only those the rule needs
   double **fsum;       // quadrature sum of the forces over the step
   double **fsample;    // sampled force at the primary node (when split)
-  double **fnode;      // quadrature auto: forces at the middle node
   int nmax_work;
   const AtomList *node_select;    // if set: only these atoms move to the nodes
 
@@ -162,7 +158,6 @@ class FixPEJump : public Fix {
   void project_sampled();
   void quadrature_sum();
   void auto_quadrature_sum();
-  double auto_defect(double dv) const;
   void check_excursion(double lo, double hi);
   void finish_check(const double *local);
   void tally_at_node();

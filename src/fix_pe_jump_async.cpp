@@ -83,7 +83,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     error->all(FLERR,
                "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
                "steps are fixed (use fix pe_jump for adaptive steps)");
-  if (nested)
+  if (automatic)
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
   if (steps->keeps_history())
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");

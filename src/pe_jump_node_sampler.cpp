@@ -15,6 +15,7 @@
 
 #include "atom.h"
 #include "error.h"
+#include "force.h"
 #include "memory.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_quadrature.h"
@@ -128,6 +129,15 @@ int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double s
     set.each(atom->mask, atom->nlocal, add);
   }
   return evaluated;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double NodeSampler::potential(int mask)
+{
+  Keep keep(*this);
+  sampler->compute(mask, ENERGY_GLOBAL, 0);
+  return sampler->energy(mask);
 }
 
 /* ---------------------------------------------------------------------- */

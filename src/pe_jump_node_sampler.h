@@ -94,6 +94,10 @@ namespace PEJump {
                   const FreeFlight &v, const AtomSet &set, int mask, double **acc, double **fend,
                   bool keep_forces = true);
 
+    // potential energy of the contributions in mask at the current
+    // positions (one evaluation; the forces are kept)
+    double potential(int mask);
+
     ForceSampler *forces() const { return sampler; }
     double memory_usage() const;
 
