@@ -724,7 +724,9 @@ void FixPEJumpAsync::final_integrate()
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const int keep_start = rule->has_end_nodes();
 
-  const bool other_forces = (modify->n_post_force_any > 0);
+  // forces on interior slow atoms come only from fixes that add forces
+  // (fix enforce2d, the only other one allowed, zeroes a zero component)
+  const bool other_forces = others->add_forces();
   double **v = atom->v;
   double **jump = field(JUMP);
   const PEJump::FreeFlight vhalf = free_flight();
