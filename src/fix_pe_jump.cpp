@@ -59,8 +59,6 @@ using PEJump::Quadrature;
 using PEJump::StabilityGuard;
 using PEJump::StepControl;
 
-static constexpr double AUTO_DAMP_STEPS = 1000.0;    // damp auto: parasitic damping time in steps
-
 /* ---------------------------------------------------------------------- */
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3, false) {}
@@ -69,8 +67,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, a
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool two_clocks) :
     Fix(lmp, narg, arg), rule(nullptr), automatic(nullptr), sampler(nullptr), nodes(nullptr),
-    state(nullptr), steps(nullptr), guard(nullptr), others(nullptr), fsum(nullptr),
-    fsample(nullptr), nmax_work(0), node_select(nullptr)
+    state(nullptr), steps(nullptr), guard(nullptr), others(nullptr), damping(nullptr),
+    fsum(nullptr), fsample(nullptr), nmax_work(0)
 {
   if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
 
@@ -120,8 +118,8 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   cached_step = -1;
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
-  fresh_atoms = damping = impulse_local = 0;
-  damp_rate = 0.0;
+  fresh_atoms = 0;
+  damping = new PEJump::ParasiticDamping();
   advance_pending = 0.0;
   // a derived style registers its callbacks at the end of its own
   // constructor, once all its arguments are accepted
@@ -156,6 +154,7 @@ FixPEJump::~FixPEJump()
   delete steps;
   delete state;
   delete others;
+  delete damping;
   delete guard;
   delete nodes;
   delete sampler;
@@ -224,13 +223,7 @@ void FixPEJump::init()
   // all) drive the parasitic period-2 mode, which the scheme does not damp:
   // damp it over the damp time (auto: AUTO_DAMP_STEPS steps, from the start if
   // fixes add forces, else from the first step where a velocity changed)
-  damp_rate = 0.0;
-  if (opts.damp_time > 0.0)
-    damp_rate = 1.0 / opts.damp_time;
-  else if (opts.damp_time < 0.0)
-    damp_rate = 1.0 / (AUTO_DAMP_STEPS * update->dt);
-  damping = (opts.damp_time > 0.0) || ((opts.damp_time < 0.0) && others->add_forces());
-  impulse_local = 0;
+  damping->init(opts.damp_time, update->dt, others->add_forces());
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
@@ -358,7 +351,7 @@ void FixPEJump::node_impulses()
     if (velocity_changed(i)) changed = true;
   });
   if (!changed) return;
-  impulse_local = 1;
+  damping->impulse_here();
   // the speeds taken at the end of the last step no longer bound the
   // excursion of this step's nodes
   guard->forget_stats();
@@ -584,7 +577,7 @@ void FixPEJump::final_integrate()
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
   const bool direct = (rule->size() == 1) && !split_primary && !steps->adapts();
-  if (!direct) quadrature_sum();
+  if (!direct) quadrature_sum(nullptr);
   double **favg = direct ? atom->f : fsum;
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
@@ -630,7 +623,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   const bool end_kick = split_primary && keep_start;
   // parasitic damping: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
-  const double beta = damping ? MIN(1.0, damp_rate * fabs(h_step)) : 0.0;
+  const double beta = damping->beta(h_step);
   double vv = mag[0], jj = mag[1];
   const double *rmass = atom->rmass;
   const double *minv = inverse_mass.data();
@@ -709,8 +702,9 @@ void FixPEJump::finish_and_open(double **favg, double rest, double ahead, double
 
 bool FixPEJump::may_open_ahead() const
 {
-  return (rule->size() == 1) && !split_primary && !steps->keeps_history() && neighbor->dist_check &&
-      !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) && !others->step_observed();
+  return (rule->size() == 1) && !split_primary && !steps->keeps_history() && !damping->active() &&
+      neighbor->dist_check && !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) &&
+      !others->step_observed();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -903,7 +897,7 @@ void FixPEJump::refresh_start_nodes()
    loop, a Lobatto start node is the previous step's end node
 ------------------------------------------------------------------------- */
 
-void FixPEJump::quadrature_sum()
+void FixPEJump::quadrature_sum(const AtomList *only)
 {
   if (automatic) {
     auto_quadrature_sum();
@@ -918,7 +912,7 @@ void FixPEJump::quadrature_sum()
   if (split_primary || reuse_start) primary_sampled_force();
 
   double **fp = split_primary ? fsample : atom->f;
-  for_atoms(node_select, [&](int i) {
+  for_atoms(only, [&](int i) {
     if (reuse_start && std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
     for (int k = 0; k < 3; k++) {
@@ -932,10 +926,10 @@ void FixPEJump::quadrature_sum()
   // with a Lobatto rule the total force at the primary node (the step end)
   // is needed afterwards only for the impulses of forces outside the rule,
   // or if something looks at it (it is then fsample again)
-  const bool keep_forces = split_primary || node_select || !reuse_start;
+  const bool keep_forces = split_primary || only || !reuse_start;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
-                       group_atoms(node_select), opts.sample_mask, fsum, nullptr, keep_forces);
+                       group_atoms(only), opts.sample_mask, fsum, nullptr, keep_forces);
   evals_step += evaluated * node_cost();
   if (!keep_forces && atom->nlocal && (others->step_observed() || tally_step()))
     memcpy(&atom->f[0][0], &fsample[0][0], 3 * sizeof(double) * atom->nlocal);
@@ -1017,10 +1011,9 @@ void FixPEJump::finish_check(const double *local)
 {
   double values[StabilityGuard::NMEASURES + 1], global[StabilityGuard::NMEASURES + 1];
   for (int k = 0; k < StabilityGuard::NMEASURES; k++) values[k] = local[k];
-  values[StabilityGuard::NMEASURES] = impulse_local;
+  values[StabilityGuard::NMEASURES] = damping->take_impulse();
   MPI_Allreduce(values, global, StabilityGuard::NMEASURES + 1, MPI_DOUBLE, MPI_MAX, world);
-  impulse_local = 0;
-  if ((global[StabilityGuard::NMEASURES] > 0.0) && (opts.damp_time < 0.0)) damping = 1;
+  damping->impulse_anywhere(global[StabilityGuard::NMEASURES] > 0.0);
 
   switch (guard->judge(global)) {
     case StabilityGuard::UNSTABLE:

@@ -33,6 +33,7 @@ namespace PEJump {
   class AutoQuadrature;
   class NodeSampler;
   class OtherFixes;
+  class ParasiticDamping;
   class Quadrature;
   class StabilityGuard;
   class StepControl;
@@ -120,15 +121,12 @@ class FixPEJump : public Fix {
   void mark_velocity(int i);
 
   PEJump::Options opts;    // the keywords
-  double damp_rate;        // 1/damping time
-  int damping;             // 1 if the parasitic mode is damped now
-  int impulse_local;       // another fix changed a velocity in this step (this rank)
+  PEJump::ParasiticDamping *damping;
 
   // per-step work arrays (not migrated), only those the rule needs
   double **fsum;       // quadrature sum of the forces over the step
   double **fsample;    // sampled force at the primary node (when split)
   int nmax_work;
-  const AtomList *node_select;    // if set: only these atoms move to the nodes
 
   int started;               // 1 once the two-step state is valid
   int reinit_pending;        // redo the initial kick when all fix forces are in
@@ -156,7 +154,7 @@ class FixPEJump : public Fix {
   std::vector<double> inverse_mass;    // per atom type, set in init()
   void primary_sampled_force();
   void project_sampled();
-  void quadrature_sum();
+  void quadrature_sum(const AtomList *only);    // only: the atoms that move to the nodes
   void auto_quadrature_sum();
   void check_excursion(double lo, double hi);
   void finish_check(const double *local);

@@ -710,9 +710,7 @@ void FixPEJumpAsync::final_integrate()
   const bool direct = (rule->size() == 1) && !split_primary;
   if (!direct) {
     split->activate(InteractionSplit::FINE);
-    node_select = &moving_atoms;
-    quadrature_sum();
-    node_select = nullptr;
+    quadrature_sum(&moving_atoms);
     split->restore();
   }
   if (coarse_end) coarse_quadrature_sum(coarse_step);

@@ -35,6 +35,43 @@ static constexpr int ADAPT_BISECT = 40;         // bisections of the largest adm
 
 /* ---------------------------------------------------------------------- */
 
+void ParasiticDamping::init(double damp_time, double dt, bool adders)
+{
+  automatic = (damp_time < 0.0);
+  rate = 0.0;
+  if (damp_time > 0.0)
+    rate = 1.0 / damp_time;
+  else if (automatic)
+    rate = 1.0 / (AUTO_STEPS * dt);
+  on = (damp_time > 0.0) || (automatic && adders);
+  impulse = 0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int ParasiticDamping::take_impulse()
+{
+  const int flag = impulse;
+  impulse = 0;
+  return flag;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ParasiticDamping::impulse_anywhere(bool seen)
+{
+  if (seen && automatic) on = true;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double ParasiticDamping::beta(double h) const
+{
+  return on ? MIN(1.0, rate * fabs(h)) : 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
 StepControl::StepControl(LAMMPS *lmp, AtomState &table, double adapt_eps, double adapt_dtmin,
                          double adapt_dtmax, bool compensate) :
     Pointers(lmp),

@@ -25,6 +25,31 @@ namespace PEJump {
   // quadrature-averaged forces of the last two steps, which are kept as
   // per-atom history in the fix's state table only if one of them is on.
 
+  // Damping of the parasitic period-2 mode (damp keyword), which other
+  // fixes that add forces or change velocities (thermostats above all)
+  // drive: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps the smooth
+  // jump h a and multiplies the alternating one by -(1 - beta). damp auto:
+  // over AUTO_STEPS steps, from the start if fixes add forces, else from
+  // the first step where another fix changed a velocity.
+
+  class ParasiticDamping {
+   public:
+    static constexpr double AUTO_STEPS = 1000.0;
+
+    // damp_time < 0: auto, 0: off; dt the time step, adders: fixes add forces
+    void init(double damp_time, double dt, bool adders);
+    void impulse_here() { impulse = 1; }
+    int take_impulse();                  // this rank's impulse flag, cleared
+    void impulse_anywhere(bool seen);    // the flag reduced over the ranks
+    bool active() const { return on; }
+    double beta(double h) const;
+
+   private:
+    bool automatic = true, on = false;
+    double rate = 0.0;
+    int impulse = 0;
+  };
+
   class StepControl : protected Pointers {
    public:
     // eps <= 0: no adaptive step

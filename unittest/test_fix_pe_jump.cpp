@@ -428,6 +428,32 @@ std::vector<double> lj_state(Sim &s)
 }
 }    // namespace
 
+/* ----------------------------------------------------------------------
+   a single-node step that nothing looks at afterwards begins the next step
+   in the same pass: the trajectory is the same, bit for bit, as with the
+   steps kept apart (which an end-of-step fix forces; here one that never
+   acts in the run), whatever the options
+------------------------------------------------------------------------- */
+
+TEST(PEJump, BeginningStepsAheadKeepsTheTrajectory)
+{
+  for (const std::string opts : {"", "damp 0.05", "quadrature legendre 3", "init paper"}) {
+    std::vector<double> apart, ahead;
+    for (const bool keep_apart : {true, false}) {
+      Sim s;
+      lj_liquid(s);
+      s.cmds({"fix 1 all pe_jump " + opts, "timestep 0.005", "thermo 0"});
+      if (keep_apart) s.cmd("fix 2 all ave/time 1000000 1 1000000 c_thermo_temp");
+      s.cmd("run 150 post no");
+      (keep_apart ? apart : ahead) = lj_state(s);
+    }
+    ASSERT_EQ(apart.size(), ahead.size());
+    double d = 0.0;
+    for (size_t i = 0; i < ahead.size(); ++i) d = std::max(d, std::fabs(ahead[i] - apart[i]));
+    EXPECT_EQ(d, 0.0) << opts;
+  }
+}
+
 TEST(PEJump, SplitRunsAndRestartsAreExact)
 {
   for (const std::string rule : {"midpoint", "lobatto 3", "legendre 2"}) {
