@@ -189,7 +189,7 @@ double ForceSampler::fraction(int mask)
   if (counted_at != neighbor->ncalls) recount();
 
   double all = 0.0, part = 0.0;
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < NCOUNT; ++k) {
     if (!(have & (1 << k))) continue;
     all += count[k];
     if (mask & (1 << k)) part += count[k];
@@ -205,7 +205,7 @@ double ForceSampler::fraction(int mask)
 
 void ForceSampler::recount()
 {
-  double local[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  double local[NCOUNT] = {0.0, 0.0, 0.0, 0.0, 0.0};
   if (force->pair && force->pair->list) {
     const NeighList *list = force->pair->list;
     for (int ii = 0; ii < list->inum; ++ii) local[0] += list->numneigh[list->ilist[ii]];
@@ -216,6 +216,6 @@ void ForceSampler::recount()
   if (have & ANGLE) local[2] = neighbor->nanglelist;
   if (have & DIHEDRAL) local[3] = neighbor->ndihedrallist;
   if (have & IMPROPER) local[4] = neighbor->nimproperlist;
-  MPI_Allreduce(local, count, 5, MPI_DOUBLE, MPI_SUM, world);
+  MPI_Allreduce(local, count, NCOUNT, MPI_DOUBLE, MPI_SUM, world);
   counted_at = neighbor->ncalls;
 }

@@ -78,8 +78,9 @@ namespace PEJump {
     std::vector<Fix *> preparations, projections;
     Fix *omp;    // the OPENMP package's fix, if the /omp styles are in use
     void reduce_threads();
-    bigint counted_at;    // neighbor->ncalls when the counts were taken
-    double count[6];      // global number of interactions per contribution
+    bigint counted_at;                  // neighbor->ncalls when the counts were taken
+    static constexpr int NCOUNT = 5;    // pair, bond, angle, dihedral, improper
+    double count[NCOUNT];               // global number of interactions of each
     void recount();
   };
 

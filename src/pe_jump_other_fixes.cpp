@@ -48,7 +48,8 @@ void OtherFixes::sort(ForceSampler &sampler)
     if (ifix == self) continue;
     const int mask = ifix->setmask();
     if (mask & END_OF_STEP) end_of_step_every.push_back(MAX(ifix->nevery, 1));
-    hooks |= mask & (BETWEEN_STEPS | INSIDE_STEP);
+    // fix enforce2d zeroes the z velocity, which is zero in a 2d run anyway
+    if (!utils::strmatch(ifix->style, "^enforce2d")) hooks |= mask & (BETWEEN_STEPS | INSIDE_STEP);
     if (mask & PRE_FORCE) preparations.push_back(ifix);
     if (ifix->time_integrate) {
       others_bits |= ifix->groupbit;
