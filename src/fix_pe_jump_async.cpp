@@ -148,7 +148,20 @@ int FixPEJumpAsync::setmask()
 void FixPEJumpAsync::init()
 {
   FixPEJump::init();
+  refuse_unsplittable();
+  refuse_other_fixes();
+  topology_at_setup = topology_count();
+  find_groups();
+  split->set_fine_bit(clockbit);
+  maxexchange = state->values();
+}
 
+/* ----------------------------------------------------------------------
+   force fields that cannot be split into fine and coarse interactions
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::refuse_unsplittable() const
+{
   if (force->pair && force->pair->manybody_flag)
     error->all(FLERR,
                "Fix pe_jump/async cannot split the many-body pair style {} into slow and fast "
@@ -173,7 +186,14 @@ void FixPEJumpAsync::init()
                "Fix pe_jump/async cannot split bond style {}: its bonds can break, and the split "
                "reorders the bond list. Use fix pe_jump",
                force->bond_style);
+}
 
+/* ----------------------------------------------------------------------
+   other fixes that integrate atoms or act on the forces
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::refuse_other_fixes() const
+{
   // the interactions among atoms outside the fix group are evaluated only
   // at coarse nodes, for the slow atoms: nothing else may integrate them
   for (const auto &ifix : modify->get_fix_list())
@@ -194,11 +214,16 @@ void FixPEJumpAsync::init()
                  "forces: a slow atom's fine and coarse forces are sampled apart. Hold atoms by "
                  "leaving them out of the fix group (frozen scenery), or use fix pe_jump",
                  ifix->id, ifix->style);
+}
 
-  topology_at_setup = topology_count();
+/* ----------------------------------------------------------------------
+   the fast group (and the fine-clock group of the buffer), looked up again
+   at every init: a deleted group's bit may have gone to another group
+   since. The fast group must be a non-empty part of the fix group.
+------------------------------------------------------------------------- */
 
-  // the fast group (and the fine-clock group of the buffer) are looked up
-  // again: a deleted group's bit may have gone to another group since
+void FixPEJumpAsync::find_groups()
+{
   const int ifast = group->find(fast_group);
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted", fast_group);
   finebit = group->bitmask[ifast];
@@ -210,10 +235,6 @@ void FixPEJumpAsync::init()
       error->all(FLERR, "Fix pe_jump/async: its fine-clock group {} was deleted", clock_group);
     clockbit = group->bitmask[iclock];
   }
-  split->set_fine_bit(clockbit);
-  maxexchange = state->values();
-
-  // the fast group must be a non-empty part of the fix group
 
   const int *mask = atom->mask;
   bigint local[2] = {0, 0};    // fast atoms in the fix group, fast atoms outside it
@@ -700,9 +721,7 @@ void FixPEJumpAsync::final_integrate()
     memory->destroy(fcoarse);
     memory->create(fcoarse, nmax_coarse, 3, "pe_jump/async:fcoarse");
   }
-
   const bool coarse_end = clocks->last_fine_step();
-  const double coarse_step = clocks->start() + h_step;
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the fine quadrature average itself
@@ -713,71 +732,15 @@ void FixPEJumpAsync::final_integrate()
     quadrature_sum(&moving_atoms);
     split->restore();
   }
-  if (coarse_end) coarse_quadrature_sum(coarse_step);
+  if (coarse_end) coarse_quadrature_sum(clocks->start() + h_step);
 
-  double **x = atom->x;
-  double **f = atom->f;
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
-  const int keep_start = rule->has_end_nodes();
-
-  // forces on interior slow atoms come only from fixes that add forces
-  // (fix enforce2d, the only other one allowed, zeroes a zero component)
-  const bool other_forces = others->add_forces();
-  double **v = atom->v;
-  double **jump = field(JUMP);
-  const PEJump::FreeFlight vhalf = free_flight();
-  double **fstart = keep_start ? field(FSTART) : nullptr;
-  double **facc = field(FACC);
-  double *tpos = clocks->times();
-  const bool mark = watch(OtherFixes::BETWEEN_STEPS);
-  double **favg = direct ? f : fsum;
-  // per clock: largest |v|^2, |[v]|^2; the slow atoms' change only at
-  // coarse nodes
+  // per clock: largest |v|^2, |[v]|^2 (the slow atoms' change at coarse nodes)
   double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
-  if (coarse_end) {
-    // every atom reaches the coarse node, the slow ones jump too
-    const auto coarse_node = [&](int i) {
-      const double dt = (tpos[i] == AsyncClocks::MOVING) ? rest : coarse_step - tpos[i];
-      for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
-      if (keep_start)
-        for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
-      // interior slow atoms have no fine interactions: only other fixes' forces
-      const double *fa = moving[i] ? favg[i] : f[i];
-      if (!slow[i]) {
-        jump_atom(i, h_step, fa, mag[0]);
-      } else {
-        double fslow[3];
-        for (int k = 0; k < 3; k++) {
-          fslow[k] = (facc[i][k] + h_step * fa[k]) / coarse_step + fcoarse[i][k];
-          facc[i][k] = 0.0;
-        }
-        for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];    // into its step
-        jump_atom(i, coarse_step, fslow, mag[1]);
-      }
-      if (mark) mark_velocity(i);
-      tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
-    };
-    for (int i = 0; i < nlocal; i++)
-      if (mask[i] & groupbit) coarse_node(i);
-    for (int k = 0; k < 2; k++)
-      stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : StabilityGuard::BLOWUP;
-  } else {
-    // the atoms on the fine clock take a synchronous step; of the slow atoms
-    // those in a fine interaction move on, and they (and the others, if
-    // other fixes add forces) collect the fine forces
-    finish_step(&fast_atoms, favg, rest, mag[0]);
-    for (const int i : slow_moving)
-      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf(i, k);
-    for (const int i : other_forces ? slow_atoms : slow_moving) {
-      const double *fa = moving[i] ? favg[i] : f[i];
-      for (int k = 0; k < 3; k++) {
-        if (keep_start) fstart[i][k] = fsample[i][k];
-        facc[i][k] += h_step * fa[k];
-      }
-    }
-  }
+  double **favg = direct ? atom->f : fsum;
+  if (coarse_end)
+    reach_coarse_node(favg, mag);
+  else
+    continue_fine_step(favg, mag[0]);
   guard->set_stats(mag[0][0], mag[0][1]);
 
   // interior slow atoms catch up wherever their positions are looked at:
@@ -794,6 +757,80 @@ void FixPEJumpAsync::final_integrate()
   // the labels are output only: take them where something looks, when
   // tally_at_node() has brought the ghosts to the node
   if (coarse_end && (eflag_step || vflag_step || others->step_observed())) label_classes();
+}
+
+/* ----------------------------------------------------------------------
+   the last fine step of a coarse step: every atom reaches the coarse node
+   (the interior slow atoms from where they stopped), the atoms on the fine
+   clock jump with favg, the slow ones with the sums of their fine forces
+   over the coarse step and the coarse quadrature sum
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
+{
+  double **x = atom->x;
+  double **v = atom->v;
+  double **f = atom->f;
+  double **jump = field(JUMP);
+  double **facc = field(FACC);
+  double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
+  double *tpos = clocks->times();
+  const PEJump::FreeFlight vhalf = free_flight();
+  const bool mark = watch(OtherFixes::BETWEEN_STEPS);
+  const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
+  const double coarse_step = clocks->start() + h_step;
+  const auto one = [&](int i) {
+    const double dt = (tpos[i] == AsyncClocks::MOVING) ? rest : coarse_step - tpos[i];
+    for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
+    if (fstart)
+      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+    // interior slow atoms have no fine interactions: only other fixes' forces
+    const double *fa = moving[i] ? favg[i] : f[i];
+    if (!slow[i]) {
+      jump_atom(i, h_step, fa, mag[0]);
+    } else {
+      double fslow[3];
+      for (int k = 0; k < 3; k++) {
+        fslow[k] = (facc[i][k] + h_step * fa[k]) / coarse_step + fcoarse[i][k];
+        facc[i][k] = 0.0;
+      }
+      for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];    // into its step
+      jump_atom(i, coarse_step, fslow, mag[1]);
+    }
+    if (mark) mark_velocity(i);
+    tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
+  };
+  for_atoms(nullptr, one);
+  for (int k = 0; k < 2; k++)
+    stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : StabilityGuard::BLOWUP;
+}
+
+/* ----------------------------------------------------------------------
+   inside a coarse step: the atoms on the fine clock take a synchronous
+   step; of the slow atoms those in a fine interaction move on, and they
+   (and the others, if other fixes add forces) collect the fine forces
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
+{
+  double **x = atom->x;
+  double **f = atom->f;
+  double **facc = field(FACC);
+  double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
+  const PEJump::FreeFlight vhalf = free_flight();
+  const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
+  finish_step(&fast_atoms, favg, rest, mag);
+  for (const int i : slow_moving)
+    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf(i, k);
+  // forces on interior slow atoms come only from fixes that add forces
+  // (fix enforce2d, the only other one allowed, zeroes a zero component)
+  for (const int i : others->add_forces() ? slow_atoms : slow_moving) {
+    const double *fa = moving[i] ? favg[i] : f[i];
+    for (int k = 0; k < 3; k++) {
+      if (fstart) fstart[i][k] = fsample[i][k];
+      facc[i][k] += h_step * fa[k];
+    }
+  }
 }
 
 /* ----------------------------------------------------------------------

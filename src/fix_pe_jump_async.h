@@ -109,6 +109,9 @@ class FixPEJumpAsync : public FixPEJump {
   bool can_reverse() const override;
 
   bigint topology_count() const;
+  void refuse_unsplittable() const;
+  void refuse_other_fixes() const;
+  void find_groups();
   void note_velocity_changes(const AtomList *);
   void open_steps() override;
   PEJump::FreeFlight free_flight() const override;
@@ -120,6 +123,8 @@ class FixPEJumpAsync : public FixPEJump {
   void show_classes();    // vector_atom follows the state table
   void catch_up_all();    // the atoms that sit out fine steps catch up
   void coarse_quadrature_sum(double coarse_step);
+  void reach_coarse_node(double **favg, double mag[2][2]);
+  void continue_fine_step(double **favg, double *mag);
   void label_classes();
   void gather_flags(std::vector<int> &);
 };

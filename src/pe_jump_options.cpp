@@ -86,19 +86,7 @@ void Options::parse(LAMMPS *lmp, const char *style, int narg, char **arg, int fi
       compensate = utils::logical(FLERR, arg[iarg + 1], false, lmp);
       iarg += 2;
     } else if (strcmp(arg[iarg], "sample") == 0) {
-      sample_mask = 0;
-      ++iarg;
-      while (iarg < narg) {
-        const int bit = ForceSampler::parse(arg[iarg]);
-        if (!bit) break;
-        sample_mask |= bit;
-        ++iarg;
-      }
-      if (!sample_mask)
-        lmp->error->all(FLERR,
-                        "Fix {} sample needs one or more of pair, bond, angle, dihedral, improper, "
-                        "kspace, or all",
-                        style);
+      iarg = sample(lmp, style, narg, arg, iarg);
     } else {
       lmp->error->all(FLERR, "Unknown fix {} keyword: {}", style, arg[iarg]);
     }
@@ -138,5 +126,27 @@ int Options::quadrature(LAMMPS *lmp, const char *style, int narg, char **arg, in
   } else {
     lmp->error->all(FLERR, "Unknown fix {} quadrature rule: {}", style, which);
   }
+  return iarg;
+}
+
+/* ----------------------------------------------------------------------
+   the sample keyword at arg[iarg]: returns the index after its names
+------------------------------------------------------------------------- */
+
+int Options::sample(LAMMPS *lmp, const char *style, int narg, char **arg, int iarg)
+{
+  sample_mask = 0;
+  ++iarg;
+  while (iarg < narg) {
+    const int bit = ForceSampler::parse(arg[iarg]);
+    if (!bit) break;
+    sample_mask |= bit;
+    ++iarg;
+  }
+  if (!sample_mask)
+    lmp->error->all(FLERR,
+                    "Fix {} sample needs one or more of pair, bond, angle, dihedral, improper, "
+                    "kspace, or all",
+                    style);
   return iarg;
 }

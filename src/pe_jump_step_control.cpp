@@ -228,14 +228,23 @@ void StepControl::choose_next(const AtomSet &set, double **favg, double **jump)
   const double mvv2e = force->mvv2e;
   const double scale = MAX(energy_scale, 0.5 * mvv2e * sum[6]);
   const double target = 8.0 * ADAPT_SAFETY * eps * scale / mvv2e;
+  const double hcap = MIN(dtmax, ADAPT_GROWTH * h);
+  const double hnew = MAX(largest_step(sum, target, hcap, MIN(dtmin, hcap)), dtmin);
+  if (hnew != update->dt) set_timestep(hnew);
+}
+
+/* ----------------------------------------------------------------------
+   the largest step t in [hlow, hcap] whose predicted jump (sums of
+   choose_next()) meets the target: a scan down from hcap, then bisection;
+   if none does, the t of the smallest jump
+------------------------------------------------------------------------- */
+
+double StepControl::largest_step(const double *sum, double target, double hcap, double hlow)
+{
   const auto jump8 = [&sum](double t) {    // 8/mvv2e times the predicted jump energy
     return t * t * sum[0] + 2.0 * t * t * t * sum[1] + t * t * t * t * sum[2] - 2.0 * t * sum[3] -
         2.0 * t * t * sum[4] + sum[5];
   };
-  const double hcap = MIN(dtmax, ADAPT_GROWTH * h);
-  const double hlow = MIN(dtmin, hcap);
-
-  // largest step meeting the bound: scan down from hcap, then bisect
   double hnew = hcap;
   if (jump8(hcap) > target) {
     const double ratio = pow(hlow / hcap, 1.0 / ADAPT_SAMPLES);
@@ -265,8 +274,7 @@ void StepControl::choose_next(const AtomSet &set, double **favg, double **jump)
     }
     if (hnew < 0.0) hnew = best;    // no step meets the bound: the smallest jump
   }
-  hnew = MAX(hnew, dtmin);
-  if (hnew != update->dt) set_timestep(hnew);
+  return hnew;
 }
 
 /* ----------------------------------------------------------------------

@@ -92,6 +92,7 @@ namespace PEJump {
     int hist1, hist2;        // state fields: averaged forces of the last two steps
     double hlast, hlast2;    // sizes of the last two steps, 0 if there are none
     double mass_of(int i) const;
+    static double largest_step(const double *sum, double target, double hcap, double hlow);
   };
 
 }    // namespace PEJump
