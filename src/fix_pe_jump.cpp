@@ -41,6 +41,7 @@
 #include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_step_control.h"
+#include "timer.h"
 #include "update.h"
 
 #include <cmath>
@@ -697,14 +698,15 @@ void FixPEJump::finish_and_open(double **favg, double rest, double ahead, double
    true if the next step can begin as this one ends (finish_step() moves
    the atoms on to its primary node): a single-node rule without split or
    step-size history, nothing that looks at the atoms or may change their
-   velocities in between, lists checked by distance
+   velocities in between, lists checked by distance, and no timeout that
+   may end the run before the next step
 ------------------------------------------------------------------------- */
 
 bool FixPEJump::may_open_ahead() const
 {
   return (rule->size() == 1) && !split_primary && !steps->keeps_history() && !damping->active() &&
       neighbor->dist_check && !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) &&
-      !others->step_observed();
+      !others->step_observed() && !timer->has_timeout();
 }
 
 /* ---------------------------------------------------------------------- */

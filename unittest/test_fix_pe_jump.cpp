@@ -6,8 +6,11 @@
 
 #include "domain.h"
 #include "exceptions.h"
+#include "fix.h"
 #include "force.h"
 #include "pair_lj_cut.h"
+#include "timer.h"
+#include "update.h"
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -452,6 +455,56 @@ TEST(PEJump, BeginningStepsAheadKeepsTheTrajectory)
     for (size_t i = 0; i < ahead.size(); ++i) d = std::max(d, std::fabs(ahead[i] - apart[i]));
     EXPECT_EQ(d, 0.0) << opts;
   }
+}
+
+namespace {
+// stops the run from inside a step, as fix plumed or a library caller may
+// (timer->force_timeout()); a pre_reverse hook, so that fix pe_jump takes
+// it for neither a force nor a velocity change
+class FixStopAt : public LAMMPS_NS::Fix {
+ public:
+  FixStopAt(LAMMPS_NS::LAMMPS *lmp, int narg, char **arg) :
+      Fix(lmp, narg, arg), step(LAMMPS_NS::utils::bnumeric(FLERR, arg[3], false, lmp))
+  {
+  }
+  int setmask() override { return LAMMPS_NS::FixConst::PRE_REVERSE; }
+  void pre_reverse(int, int) override
+  {
+    if (update->ntimestep == step) timer->force_timeout();
+  }
+  LAMMPS_NS::bigint step;
+};
+
+LAMMPS_NS::Fix *stop_at_creator(LAMMPS_NS::LAMMPS *lmp, int narg, char **arg)
+{
+  return new FixStopAt(lmp, narg, arg);
+}
+}    // namespace
+
+/* ----------------------------------------------------------------------
+   a run stopped from inside a step ends at that step's node, exactly as
+   a run of that many steps, also where the fix begins steps ahead
+------------------------------------------------------------------------- */
+
+TEST(PEJump, RunStoppedInsideAStepEndsAtItsNode)
+{
+  std::vector<double> stopped, plain;
+  for (const bool stop : {true, false}) {
+    Sim s;
+    lj_liquid(s);
+    (*s.lmp->modify->fix_map)["stop/at"] = &stop_at_creator;
+    s.cmds({"fix 1 all pe_jump", "timestep 0.005", "thermo 0"});
+    if (stop)
+      s.cmds({"fix 2 all stop/at 60", "run 100 post no"});
+    else
+      s.cmd("run 60 post no");
+    EXPECT_EQ(s.lmp->update->ntimestep, 60);
+    (stop ? stopped : plain) = lj_state(s);
+  }
+  ASSERT_EQ(stopped.size(), plain.size());
+  double d = 0.0;
+  for (size_t i = 0; i < plain.size(); ++i) d = std::max(d, std::fabs(stopped[i] - plain[i]));
+  EXPECT_EQ(d, 0.0);
 }
 
 TEST(PEJump, SplitRunsAndRestartsAreExact)
