@@ -319,7 +319,13 @@ void FixPEJump::agree_on_started()
 {
   int all_started = 0;
   MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
-  started = all_started;
+  if ((all_started < 0) && (comm->me == 0))
+    utils::logmesg(lmp,
+                   "Fix {}: the per-atom state in the restart file does not fit this fix "
+                   "(written with other settings or by another version): the two-step scheme "
+                   "restarts from the current state\n",
+                   style);
+  started = (all_started > 0) ? 1 : 0;
 
   // velocities that are not finite (a velocity command gone wrong, e.g.
   // velocity scale to a negative temperature) would only show up later
@@ -1244,7 +1250,7 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  list[0] = started;
+  list[0] = (started > 0) ? 1 : 0;
   list[1] = rule->family();
   list[2] = rule->points();
   list[3] = evals_total;
@@ -1287,7 +1293,7 @@ void FixPEJump::unpack_restart(int nlocal, int nth)
   int m = 0;
   for (int i = 0; i < nth; i++) m += static_cast<int>(extra[nlocal][m]);
   if (static_cast<int>(extra[nlocal][m]) != state->values() + 1) {
-    started = 0;
+    started = -1;    // agree_on_started() says so
     return;
   }
   state->unpack(nlocal, &extra[nlocal][m + 1]);

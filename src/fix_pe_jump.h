@@ -128,7 +128,7 @@ class FixPEJump : public Fix {
   double **fsample;    // sampled force at the primary node (when split)
   int nmax_work;
 
-  int started;               // 1 once the two-step state is valid
+  int started;               // 1 once the two-step state is valid (-1: restart data misfit)
   int reinit_pending;        // redo the initial kick when all fix forces are in
   int opened_ahead;          // the last step began this one already
   int split_primary;         // 1 if forces not integrated by the rule act as impulses
