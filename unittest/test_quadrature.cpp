@@ -96,3 +96,36 @@ TEST(Quadrature, RejectsPointCountsOutOfRange)
   EXPECT_THROW(Quadrature(Quadrature::LOBATTO, 1), std::invalid_argument);
   EXPECT_THROW(Quadrature(Quadrature::LOBATTO, 6), std::invalid_argument);
 }
+
+// quadrature auto: each nested Lobatto rule (2, 3, 5 points) keeps the nodes
+// of the rule before and names every node by its place in the finest rule;
+// the nodes it adds are exactly those the rule before lacks, and each level
+// integrates the monomials up to its own degree
+TEST(Quadrature, NestedLobattoRulesShareTheirNodes)
+{
+  const LAMMPS_NS::PEJump::NestedLobatto nested;
+  ASSERT_EQ(nested.levels(), 3);
+  const Quadrature &finest = nested.finest();
+  ASSERT_EQ(finest.size(), 5);
+  int added_total = 0;
+  for (int level = 0; level < nested.levels(); ++level) {
+    const Quadrature &r = nested.rule(level);
+    EXPECT_EQ(r.family(), Quadrature::LOBATTO);
+    EXPECT_EQ(r.size(), (level == 0) ? 2 : (level == 1) ? 3 : 5);
+    for (int j = 0; j < r.size(); ++j) {
+      const int k = nested.finest_index(level, j);
+      EXPECT_DOUBLE_EQ(finest.node[k], r.node[j]);
+      bool before = false;
+      if (level > 0) {
+        const Quadrature &prev = nested.rule(level - 1);
+        for (int i = 0; i < prev.size(); ++i) before |= (prev.node[i] == r.node[j]);
+      }
+      EXPECT_EQ(nested.added(level, j), !before) << level << " " << j;
+      added_total += nested.added(level, j) ? 1 : 0;
+    }
+    for (int p = 0; p <= r.degree(); ++p)
+      EXPECT_NEAR(integrate(r, p), 1.0 / (p + 1), 1e-15) << level << " " << p;
+  }
+  // every node of the finest rule is evaluated once over the three levels
+  EXPECT_EQ(added_total, finest.size());
+}
