@@ -2,7 +2,7 @@
 """PE-JUMP cost targets: time the fixes against fix nve on three scenes with
 one binary, write bench/results/cost/<label>.json; --report compares labels.
 
-    /usr/bin/python3 bench/cost/cost.py --label before --lmp /work/before-bin/lmp \\
+    /usr/bin/python3 bench/cost/cost.py --label before --lmp /path/to/older/build/lmp \\
         [--libdir DIR] [--reps 3] [--quick] [--scenes bonded,lj,springs]
     /usr/bin/python3 bench/cost/cost.py --report [--out FILE] [--labels a,b]
 
