@@ -111,7 +111,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   force_reneighbor = 1;
   next_reneighbor = -1;
 
-  started = reinit_pending = opened_ahead = 0;
+  started = reinit_pending = opened_ahead = before_open = 0;
   split_primary = use_copy = 0;
   eflag_step = vflag_step = 0;
   h_step = 0.0;
@@ -298,6 +298,14 @@ void FixPEJump::initial_integrate(int /*vflag*/)
     return;
   }
   node_impulses();
+  if (open_while_moving()) {
+    // the check takes v^n + [v]^n/2, then one pass begins the steps and moves
+    before_open = 1;
+    check_lists();
+    before_open = 0;
+    open_and_advance(rule->node[rule->primary()] * h_step);
+    return;
+  }
   open_steps();
   if (steps->keeps_history()) {
     grow_work();
@@ -398,7 +406,36 @@ bool FixPEJump::watch(int when) const
 
 PEJump::FreeFlight FixPEJump::free_flight() const
 {
-  return {atom->v, nullptr, nullptr};
+  return {atom->v, field(JUMP), nullptr, before_open != 0};
+}
+
+/* ----------------------------------------------------------------------
+   the steps can begin in the pass that moves the atoms if nothing acts on
+   the free-flight velocities in between (compensation, the second half of
+   an end kick)
+------------------------------------------------------------------------- */
+
+bool FixPEJump::open_while_moving() const
+{
+  return !steps->keeps_history() && !(split_primary && rule->has_end_nodes());
+}
+
+/* ----------------------------------------------------------------------
+   open_steps() and advance() in one pass, with the same operations
+------------------------------------------------------------------------- */
+
+void FixPEJump::open_and_advance(double t)
+{
+  double **x = atom->x;
+  double **v = atom->v;
+  double **jump = field(JUMP);
+  const double now = advance_now(t);
+  for_atoms(nullptr, [&](int i) {
+    for (int k = 0; k < 3; k++) {
+      v[i][k] += 0.5 * jump[i][k];
+      x[i][k] += now * v[i][k];
+    }
+  });
 }
 
 /* ----------------------------------------------------------------------
@@ -412,16 +449,24 @@ void FixPEJump::advance(double t)
 {
   double **x = atom->x;
   double **v = atom->v;
-  // on a step that rebuilds the lists, they are built (and atoms exchanged
-  // and sorted) at the end node q^{n+1}, as with fix nve, so that a run
-  // continued from a restart, which builds them there, reproduces the
-  // unbroken run; the atoms go back to the primary node after the build
-  const bool later = (t != h_step) && rebuild_due();
-  const double now = later ? h_step : t;
-  advance_pending = later ? t - h_step : 0.0;
+  const double now = advance_now(t);
   for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++) x[i][k] += now * v[i][k];
   });
+}
+
+/* ----------------------------------------------------------------------
+   on a step that rebuilds the lists, they are built (and atoms exchanged
+   and sorted) at the end node q^{n+1}, as with fix nve, so that a run
+   continued from a restart, which builds them there, reproduces the
+   unbroken run; the atoms go back to the primary node after the build
+------------------------------------------------------------------------- */
+
+double FixPEJump::advance_now(double t)
+{
+  const bool later = (t != h_step) && rebuild_due();
+  advance_pending = later ? t - h_step : 0.0;
+  return later ? h_step : t;
 }
 
 /* ----------------------------------------------------------------------

@@ -131,6 +131,7 @@ class FixPEJump : public Fix {
   int started;               // 1 once the two-step state is valid (-1: restart data misfit)
   int reinit_pending;        // redo the initial kick when all fix forces are in
   int opened_ahead;          // the last step began this one already
+  int before_open;           // atom->v holds v^n while this step's nodes are checked
   int split_primary;         // 1 if forces not integrated by the rule act as impulses
   int use_copy;              // split by copying f before reverse communication
   int fresh_atoms;           // 1 if atoms were created since the last setup (this rank)
@@ -146,8 +147,11 @@ class FixPEJump : public Fix {
   virtual void start_scheme(const char *, bool);
   void agree_on_started();
   virtual void node_impulses();
-  virtual void open_steps();     // v^n -> v^{n+1/2} of the atoms whose step begins
-  bool watch(int when) const;    // other fixes may change velocities then (OtherFixes hooks)
+  virtual void open_steps();                 // v^n -> v^{n+1/2} of the atoms whose step begins
+  virtual bool open_while_moving() const;    // open_steps() and advance() may be one pass
+  void open_and_advance(double t);
+  double advance_now(double t);    // free flight now (t, or to the step end)
+  bool watch(int when) const;      // other fixes may change velocities then (OtherFixes hooks)
   virtual PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
   void refresh_start_nodes();
   double inverse_mass_of(int) const;

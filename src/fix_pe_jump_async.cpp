@@ -360,6 +360,15 @@ PEJump::FreeFlight FixPEJumpAsync::free_flight() const
 }
 
 /* ----------------------------------------------------------------------
+   the steps that begin are those of the atoms on the fine clock only
+------------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::open_while_moving() const
+{
+  return false;
+}
+
+/* ----------------------------------------------------------------------
    number of bonds, angles, dihedrals and impropers of the system
 ------------------------------------------------------------------------- */
 

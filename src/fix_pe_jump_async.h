@@ -115,6 +115,7 @@ class FixPEJumpAsync : public FixPEJump {
   void note_velocity_changes(const AtomList *);
   void open_steps() override;
   PEJump::FreeFlight free_flight() const override;
+  bool open_while_moving() const override;
   void check_clocks();
   void assign_buffer();
   void find_slow();

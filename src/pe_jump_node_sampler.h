@@ -44,14 +44,15 @@ namespace PEJump {
 
   // Free-flight velocities v^{n+1/2} of the owned atoms: atom->v, where
   // an atom is inside its step, or its node velocity plus half its jump,
-  // where at_node[i] != 0 (at_node nullptr: every atom is inside its step)
+  // where at_node[i] != 0 or for all atoms if all_at_node
   struct FreeFlight {
     double **v;
     double **jump;
     const int *at_node;
+    bool all_at_node = false;
     double operator()(int i, int k) const
     {
-      return (at_node && at_node[i]) ? v[i][k] + 0.5 * jump[i][k] : v[i][k];
+      return (all_at_node || (at_node && at_node[i])) ? v[i][k] + 0.5 * jump[i][k] : v[i][k];
     }
   };
 
