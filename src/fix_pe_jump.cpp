@@ -112,7 +112,6 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   next_reneighbor = -1;
 
   started = reinit_pending = opened_ahead = before_open = 0;
-  split_primary = use_copy = 0;
   eflag_step = vflag_step = 0;
   h_step = 0.0;
   evals_step = evals_total = 0.0;
@@ -211,9 +210,7 @@ void FixPEJump::init()
   // Gauss-Legendre rule then gets the centre as an extra node
 
   const int present = sampler->present();
-  split_primary = others->add_forces() || ((opts.sample_mask & present) != present);
-  use_copy = split_primary && ((opts.sample_mask & present) == present);
-  const bool centre = split_primary && (rule->family() == Quadrature::LEGENDRE) &&
+  const bool centre = split_primary() && (rule->family() == Quadrature::LEGENDRE) &&
       (rule->points() % 2 == 0) && !automatic;
   if (centre != (rule->size() != rule->points())) {
     auto *other = new Quadrature(rule->family(), rule->points(), centre);
@@ -383,7 +380,7 @@ void FixPEJump::open_steps()
   double **f = atom->f;
   double **jump = field(JUMP);
   double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
-  const bool half_kick = split_primary && rule->has_end_nodes();
+  const bool half_kick = split_primary() && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
   for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
@@ -417,7 +414,7 @@ PEJump::FreeFlight FixPEJump::free_flight() const
 
 bool FixPEJump::open_while_moving() const
 {
-  return !steps->keeps_history() && !(split_primary && rule->has_end_nodes());
+  return !steps->keeps_history() && !(split_primary() && rule->has_end_nodes());
 }
 
 /* ----------------------------------------------------------------------
@@ -564,6 +561,22 @@ void FixPEJump::mark_velocity(int i)
 
 /* ---------------------------------------------------------------------- */
 
+bool FixPEJump::split_primary() const
+{
+  const int present = sampler->present();
+  return others->add_forces() || ((opts.sample_mask & present) != present);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool FixPEJump::use_copy() const
+{
+  const int present = sampler->present();
+  return others->add_forces() && ((opts.sample_mask & present) == present);
+}
+
+/* ---------------------------------------------------------------------- */
+
 AtomSet FixPEJump::group_atoms(const AtomList *only) const
 {
   return {groupbit, only};
@@ -607,7 +620,7 @@ void FixPEJump::pre_reverse(int eflag, int vflag)
 {
   eflag_step = eflag;
   vflag_step = vflag;
-  if (!use_copy) return;
+  if (!use_copy()) return;
   grow_work();
   const int nall = atom->nlocal + atom->nghost;
   if (nall) memcpy(&fsample[0][0], &atom->f[0][0], 3 * sizeof(double) * nall);
@@ -628,7 +641,7 @@ void FixPEJump::final_integrate()
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
-  const bool direct = (rule->size() == 1) && !split_primary && !steps->adapts();
+  const bool direct = (rule->size() == 1) && !split_primary() && !steps->adapts();
   if (!direct) quadrature_sum(nullptr);
   double **favg = direct ? atom->f : fsum;
 
@@ -671,8 +684,8 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   // forces not integrated by the rule: an impulse at the centre of the step
   // (position Verlet), or at its end node half now and half at the start of
   // the next step (velocity Verlet)
-  const bool centre_kick = split_primary && !keep_start;
-  const bool end_kick = split_primary && keep_start;
+  const bool centre_kick = split_primary() && !keep_start;
+  const bool end_kick = split_primary() && keep_start;
   // parasitic damping: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
   const double beta = damping->beta(h_step);
@@ -755,7 +768,7 @@ void FixPEJump::finish_and_open(double **favg, double rest, double ahead, double
 
 bool FixPEJump::may_open_ahead() const
 {
-  return (rule->size() == 1) && !split_primary && !steps->keeps_history() && !damping->active() &&
+  return (rule->size() == 1) && !split_primary() && !steps->keeps_history() && !damping->active() &&
       neighbor->dist_check && !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) &&
       !others->step_observed() && !timer->has_timeout();
 }
@@ -831,12 +844,12 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   grow_work();
   if (with_start && rule->has_end_nodes())
     store_start_node();
-  else if (with_start && split_primary)
+  else if (with_start && split_primary())
     primary_sampled_force();
 
   // the jump takes the forces that the rule integrates
   double **v = atom->v;
-  double **f = split_primary ? fsample : atom->f;
+  double **f = split_primary() ? fsample : atom->f;
   double **jump = field(JUMP);
   const double *rmass = atom->rmass;
   const double *mass = atom->mass;
@@ -851,7 +864,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   // fixes defined after this one act on the forces after its setup(): redo
   // the initial kick with the complete forces at the first step
 
-  reinit_pending = with_start && (opts.init_style == PEJump::Options::KICK) && !split_primary &&
+  reinit_pending = with_start && (opts.init_style == PEJump::Options::KICK) && !split_primary() &&
       sampler->has_projections();
   started = 1;
   steps->forget();
@@ -887,11 +900,11 @@ void FixPEJump::primary_sampled_force()
 {
   const int nlocal = atom->nlocal;
   const size_t nbytes = 3 * sizeof(double) * nlocal;
-  if (!nlocal && !split_primary) return;
+  if (!nlocal && !split_primary()) return;
 
-  if (!split_primary) {
+  if (!split_primary()) {
     memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
-  } else if (use_copy) {
+  } else if (use_copy()) {
     if (force->newton) comm->reverse_comm(this);
   } else {
     NodeSampler::Keep keep(*nodes);
@@ -900,7 +913,7 @@ void FixPEJump::primary_sampled_force()
     evals_step += sampler->fraction(opts.sample_mask);
   }
   // at setup, fixes after this one have not yet acted on the forces
-  if (sampler->has_projections() && (split_primary || update->setupflag)) project_sampled();
+  if (sampler->has_projections() && (split_primary() || update->setupflag)) project_sampled();
 }
 
 /* ----------------------------------------------------------------------
@@ -962,9 +975,9 @@ void FixPEJump::quadrature_sum(const AtomList *only)
   const int reuse_start = rule->has_end_nodes();
   double **fstart = reuse_start ? field(FSTART) : nullptr;
 
-  if (split_primary || reuse_start) primary_sampled_force();
+  if (split_primary() || reuse_start) primary_sampled_force();
 
-  double **fp = split_primary ? fsample : atom->f;
+  double **fp = split_primary() ? fsample : atom->f;
   for_atoms(only, [&](int i) {
     if (reuse_start && std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
@@ -979,7 +992,7 @@ void FixPEJump::quadrature_sum(const AtomList *only)
   // with a Lobatto rule the total force at the primary node (the step end)
   // is needed afterwards only for the impulses of forces outside the rule,
   // or if something looks at it (it is then fsample again)
-  const bool keep_forces = split_primary || only || !reuse_start;
+  const bool keep_forces = split_primary() || only || !reuse_start;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
                        group_atoms(only), opts.sample_mask, fsum, nullptr, keep_forces);
@@ -1222,11 +1235,11 @@ double FixPEJump::compute_vector(int n)
 
 void FixPEJump::grow_work()
 {
-  const int need = use_copy ? atom->nlocal + atom->nghost : atom->nlocal;
+  const int need = use_copy() ? atom->nlocal + atom->nghost : atom->nlocal;
   if (need <= nmax_work) return;
   nmax_work = need + need / 16 + 64;
-  const bool sum = (rule->size() > 1) || split_primary || steps->keeps_history() || automatic;
-  const bool sample = split_primary || rule->has_end_nodes() || automatic;
+  const bool sum = (rule->size() > 1) || split_primary() || steps->keeps_history() || automatic;
+  const bool sample = split_primary() || rule->has_end_nodes() || automatic;
   memory->destroy(fsum);
   memory->destroy(fsample);
   if (sum) memory->create(fsum, nmax_work, 3, "pe_jump:fsum");

@@ -132,8 +132,6 @@ class FixPEJump : public Fix {
   int reinit_pending;        // redo the initial kick when all fix forces are in
   int opened_ahead;          // the last step began this one already
   int before_open;           // atom->v holds v^n while this step's nodes are checked
-  int split_primary;         // 1 if forces not integrated by the rule act as impulses
-  int use_copy;              // split by copying f before reverse communication
   int fresh_atoms;           // 1 if atoms were created since the last setup (this rank)
   double advance_pending;    // free flight left for after this step's list build
   int eflag_step, vflag_step;
@@ -144,6 +142,12 @@ class FixPEJump : public Fix {
   double cached[2];    // pseudo-kinetic and jump energy at cached_step
 
   PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
+  // forces not integrated by the rule (other fixes that add forces,
+  // contributions left out by sample) act as impulses at the primary node,
+  // where the sampled part is split off: by copying f before the reverse
+  // communication if all contributions are sampled, else by a sampling
+  bool split_primary() const;
+  bool use_copy() const;
   virtual void start_scheme(const char *, bool);
   void agree_on_started();
   virtual void node_impulses();

@@ -735,7 +735,7 @@ void FixPEJumpAsync::final_integrate()
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the fine quadrature average itself
   evals_step = split->fraction(InteractionSplit::FINE);
-  const bool direct = (rule->size() == 1) && !split_primary;
+  const bool direct = (rule->size() == 1) && !split_primary();
   if (!direct) {
     split->activate(InteractionSplit::FINE);
     quadrature_sum(&moving_atoms);
