@@ -358,9 +358,11 @@ void FixPEJump::agree_on_started()
 void FixPEJump::node_impulses()
 {
   if (!watch(OtherFixes::BETWEEN_STEPS)) return;
+  double **v = atom->v;
+  const double *vsig = state->val(VSIG);
   bool changed = false;
   for_atoms(nullptr, [&](int i) {
-    if (velocity_changed(i)) changed = true;
+    if (PEJump::velocity_fingerprint(v[i]) != vsig[i]) changed = true;
   });
   if (!changed) return;
   damping->impulse_here();
@@ -521,42 +523,18 @@ double **FixPEJump::field(int which) const
   return state->vec(which);
 }
 
-/* ----------------------------------------------------------------------
-   a fingerprint of a velocity (53 bits of a hash of its components, -0
-   taken as 0): a velocity changed by another fix (scaled, reversed,
-   reset, thermostatted) has another fingerprint
-------------------------------------------------------------------------- */
-
-double FixPEJump::fingerprint(const double *v)
-{
-  // odd multipliers: a change of one component always changes the sum;
-  // the rotations keep sign flips of two components from cancelling
-  static constexpr uint64_t K[3] = {0x9e3779b97f4a7c15ULL, 0xbf58476d1ce4e5b9ULL,
-                                    0x94d049bb133111ebULL};
-  uint64_t h = 0;
-  for (int k = 0; k < 3; k++) {
-    const double c = (v[k] == 0.0) ? 0.0 : v[k];
-    uint64_t bits;
-    memcpy(&bits, &c, sizeof(bits));
-    bits = (bits << (21 * k)) | (k ? bits >> (64 - 21 * k) : 0);
-    h += bits * K[k];
-  }
-  h ^= h >> 29;
-  return static_cast<double>(h >> 11);
-}
-
 /* ---------------------------------------------------------------------- */
 
 bool FixPEJump::velocity_changed(int i) const
 {
-  return fingerprint(atom->v[i]) != state->val(VSIG)[i];
+  return PEJump::velocity_fingerprint(atom->v[i]) != state->val(VSIG)[i];
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJump::mark_velocity(int i)
 {
-  state->val(VSIG)[i] = fingerprint(atom->v[i]);
+  state->val(VSIG)[i] = PEJump::velocity_fingerprint(atom->v[i]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -649,7 +627,7 @@ void FixPEJump::final_integrate()
   double mag[2] = {0.0, 0.0};
   opened_ahead = may_open_ahead();
   if (opened_ahead)
-    finish_and_open(favg, rest, rule->node[rule->primary()] * update->dt, mag);
+    jump_loop(nullptr, favg, rest, rule->node[rule->primary()] * update->dt, nullptr, nullptr, mag);
   else
     finish_step(nullptr, favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
@@ -679,7 +657,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   const bool keep_start = rule->has_end_nodes();
   double **fstart = keep_start ? field(FSTART) : nullptr;
   double **fhist = only ? nullptr : steps->next_history();
-  const bool mark = watch(OtherFixes::BETWEEN_STEPS);
+  double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? state->val(VSIG) : nullptr;
   const double kick = 2.0 * h_step * force->ftm2v;
   // forces not integrated by the rule: an impulse at the centre of the step
   // (position Verlet), or at its end node half now and half at the start of
@@ -689,6 +667,10 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   // parasitic damping: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
   const double beta = damping->beta(h_step);
+  if (!centre_kick && !end_kick && (beta == 0.0) && !fhist) {
+    jump_loop(only, favg, rest, -1.0, fstart, vsig, mag);
+    return;
+  }
   double vv = mag[0], jj = mag[1];
   const double *rmass = atom->rmass;
   const double *minv = inverse_mass.data();
@@ -710,7 +692,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
       if (keep_start) fstart[i][k] = fsample[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
-    if (mark) mark_velocity(i);
+    if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
     vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
     jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
   };
@@ -720,37 +702,48 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
 }
 
 /* ----------------------------------------------------------------------
-   finish_step() for all atoms of the group without impulses, damping,
-   start nodes or history, then the next step's open_steps() and advance()
-   by ahead, in the same operations as those three in turn
+   finish_step() without impulses, damping or force history, as one plain
+   loop over the atoms of the group (or those listed in only): the jump,
+   the move on by rest, the start-node force (fstart, if given), the
+   velocity fingerprint (vsig, if given); with ahead >= 0 also the next
+   step's open_steps() and advance() by ahead, in the same operations as
+   those in turn
 ------------------------------------------------------------------------- */
 
-void FixPEJump::finish_and_open(double **favg, double rest, double ahead, double *mag)
+void FixPEJump::jump_loop(const AtomList *only, double **favg, double rest, double ahead,
+                          double **fstart, double *vsig, double *mag)
 {
   double **x = atom->x;
   double **v = atom->v;
   double **jump = field(JUMP);
   const int *mask = atom->mask;
   const double *rmass = atom->rmass;
-  const int *type = atom->type;
-  const int nlocal = atom->nlocal;
-  const double kick = 2.0 * h_step * force->ftm2v;
   const double *minv = inverse_mass.data();
+  const int *type = atom->type;
+  const int n = only ? static_cast<int>(only->size()) : atom->nlocal;
+  const double kick = 2.0 * h_step * force->ftm2v;
   double vv = mag[0], jj = mag[1];
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
+  for (int ii = 0; ii < n; ii++) {
+    const int i = only ? (*only)[ii] : ii;
+    if (!only && !(mask[i] & groupbit)) continue;
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
     double vh[3] = {v[i][0], v[i][1], v[i][2]};
     double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
     double vnew[3];
     for (int k = 0; k < 3; k++) {
-      const double xk = x[i][k] + rest * vh[k];
+      double xk = x[i][k] + rest * vh[k];
       vnew[k] = jump_component(dtfm * favg[i][k], vh[k], jmp[k]);
-      vh[k] += 0.5 * jmp[k];
-      x[i][k] = xk + ahead * vh[k];
-      v[i][k] = vh[k];
+      if (vsig) v[i][k] = vh[k];    // the node velocity, for the fingerprint
+      if (ahead >= 0.0) {
+        vh[k] += 0.5 * jmp[k];
+        xk += ahead * vh[k];
+      }
+      x[i][k] = xk;
       jump[i][k] = jmp[k];
+      if (fstart) fstart[i][k] = fsample[i][k];
     }
+    if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
+    for (int k = 0; k < 3; k++) v[i][k] = vh[k];
     vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
     jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
   }
@@ -1136,8 +1129,8 @@ int FixPEJump::detect_velocity_change()
   int local[2] = {0, 0};    // some differ, some are not reversed
   for_atoms(nullptr, [&](int i) {
     const double back[3] = {-v[i][0], -v[i][1], -v[i][2]};
-    if (fingerprint(v[i]) != vsig[i]) local[0] = 1;
-    if (fingerprint(back) != vsig[i]) local[1] = 1;
+    if (PEJump::velocity_fingerprint(v[i]) != vsig[i]) local[0] = 1;
+    if (PEJump::velocity_fingerprint(back) != vsig[i]) local[1] = 1;
   });
   int global[2];
   MPI_Allreduce(local, global, 2, MPI_INT, MPI_MAX, world);

@@ -103,7 +103,6 @@ class FixPEJump : public Fix {
   // them, its free-flight velocity v^{n+1/2} = v^n + [v]^n/2.
   int JUMP, VSIG, FSTART;
   double **field(int which) const;
-  static double fingerprint(const double *v);
 
   // one component of the two-step update: with vh = v^{n+1/2} and jmp =
   // [v]^n on entry and dfavg = 2 h <F>/m, vh becomes the node velocity
@@ -198,7 +197,8 @@ class FixPEJump : public Fix {
   // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
   void jump_atom(int i, double h, const double *favg, double *mag);
   void finish_step(const AtomList *only, double **favg, double rest, double *mag);
-  void finish_and_open(double **favg, double rest, double ahead, double *mag);
+  void jump_loop(const AtomList *only, double **favg, double rest, double ahead, double **fstart,
+                 double *vsig, double *mag);
   bool may_open_ahead() const;
 
   // hooks for derived styles

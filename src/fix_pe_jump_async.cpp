@@ -328,8 +328,10 @@ void FixPEJumpAsync::node_impulses()
 
 void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
 {
+  double **v = atom->v;
+  const double *vsig = state->val(VSIG);
   for_atoms(only, [&](int i) {
-    if (velocity_changed(i)) changes_seen = 1;
+    if (PEJump::velocity_fingerprint(v[i]) != vsig[i]) changes_seen = 1;
   });
 }
 
@@ -342,10 +344,10 @@ void FixPEJumpAsync::open_steps()
 {
   double **v = atom->v;
   double **jump = field(JUMP);
-  const bool mark = watch(OtherFixes::INSIDE_STEP);
+  double *vsig = watch(OtherFixes::INSIDE_STEP) ? state->val(VSIG) : nullptr;
   for (const int i : fast_atoms) {
     for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
-    if (mark) mark_velocity(i);
+    if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
   }
 }
 
@@ -785,7 +787,7 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
   double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
   double *tpos = clocks->times();
   const PEJump::FreeFlight vhalf = free_flight();
-  const bool mark = watch(OtherFixes::BETWEEN_STEPS);
+  double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? state->val(VSIG) : nullptr;
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const double coarse_step = clocks->start() + h_step;
   const auto one = [&](int i) {
@@ -806,7 +808,7 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
       for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];    // into its step
       jump_atom(i, coarse_step, fslow, mag[1]);
     }
-    if (mark) mark_velocity(i);
+    if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
     tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
   };
   for_atoms(nullptr, one);

@@ -16,6 +16,8 @@
 
 #include "pointers.h"
 
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,27 @@ namespace PEJump {
   // the table grows, copies, packs (exchange and restart) and counts the
   // memory of all of them. Only owned atoms have state, so the table grows
   // with the number of owned atoms (ensure()), not with atom->nmax.
+
+  // A fingerprint of a velocity, kept per atom to tell a velocity that
+  // another fix or command changed (scaled, reversed, reset, thermostatted)
+  // from the one the fix left: 53 bits of a hash of the components (-0
+  // taken as 0). Odd multipliers make a change of one component change the
+  // sum; the rotations keep sign flips of two components from cancelling.
+  inline double velocity_fingerprint(const double *v)
+  {
+    static constexpr uint64_t K[3] = {0x9e3779b97f4a7c15ULL, 0xbf58476d1ce4e5b9ULL,
+                                      0x94d049bb133111ebULL};
+    uint64_t h = 0;
+    for (int k = 0; k < 3; k++) {
+      const double c = (v[k] == 0.0) ? 0.0 : v[k];
+      uint64_t bits;
+      memcpy(&bits, &c, sizeof(bits));
+      bits = (bits << (21 * k)) | (k ? bits >> (64 - 21 * k) : 0);
+      h += bits * K[k];
+    }
+    h ^= h >> 29;
+    return static_cast<double>(h >> 11);
+  }
 
   class AtomState : protected Pointers {
    public:
