@@ -21,6 +21,7 @@ FixStyle(pe_jump,FixPEJump);
 #define LMP_FIX_PE_JUMP_H
 
 #include "fix.h"
+#include "pe_jump_node_sampler.h"
 #include "pe_jump_options.h"
 
 #include <string>
@@ -31,14 +32,11 @@ namespace PEJump {
   class AtomState;
   class ForceSampler;
   class AutoQuadrature;
-  class NodeSampler;
   class OtherFixes;
   class ParasiticDamping;
   class Quadrature;
   class StabilityGuard;
   class StepControl;
-  struct AtomSet;
-  struct FreeFlight;
 }    // namespace PEJump
 
 class FixPEJump : public Fix {
@@ -77,7 +75,7 @@ class FixPEJump : public Fix {
   double memory_usage() override;
 
  protected:
-  using AtomList = std::vector<int>;
+  using AtomList = PEJump::AtomList;
 
   // for derived styles: keywords are parsed from arg[first_keyword] on;
   // the slow/fast style has fixed steps (compensate is off by default) and
@@ -178,14 +176,7 @@ class FixPEJump : public Fix {
   // apply one(i) to the owned atoms of the group, or to those listed in only
   template <typename Function> void for_atoms(const AtomList *only, Function &&one) const
   {
-    if (only) {
-      for (const int i : *only) one(i);
-      return;
-    }
-    const int *mask = atom_mask();
-    const int nlocal = owned_atoms();
-    for (int i = 0; i < nlocal; i++)
-      if (mask[i] & groupbit) one(i);
+    group_atoms(only).each(atom_mask(), owned_atoms(), one);
   }
   const int *atom_mask() const;    // atom->mask, atom->nlocal (the header
   int owned_atoms() const;         // needs no definition of class Atom)

@@ -48,9 +48,11 @@ void OtherFixes::sort(ForceSampler &sampler)
     if (ifix == self) continue;
     const int mask = ifix->setmask();
     if (mask & END_OF_STEP) end_of_step_every.push_back(MAX(ifix->nevery, 1));
-    // fix enforce2d zeroes the z velocity, which is zero in a 2d run anyway
-    if (!utils::strmatch(ifix->style, "^enforce2d")) hooks |= mask & (BETWEEN_STEPS | INSIDE_STEP);
     if (mask & PRE_FORCE) preparations.push_back(ifix);
+    // the fixes that replace or project forces leave velocities alone (fix
+    // enforce2d zeroes the z velocity, which is zero in a 2d run anyway)
+    const bool projects = (mask & POST_FORCE) && replaces_forces(ifix);
+    if (!projects) hooks |= mask & (BETWEEN_STEPS | INSIDE_STEP);
     if (ifix->time_integrate) {
       others_bits |= ifix->groupbit;
       continue;
@@ -60,15 +62,24 @@ void OtherFixes::sort(ForceSampler &sampler)
                  "Fix {} cannot be combined with the constraints of fix {} ({}): they assume the "
                  "velocity Verlet update of fix nve. Use fix nve, or remove the constraints",
                  self->style, ifix->id, ifix->style);
-    if (!(mask & POST_FORCE)) continue;
-    if (utils::strmatch(ifix->style, "^setforce") || utils::strmatch(ifix->style, "^aveforce") ||
-        utils::strmatch(ifix->style, "^freeze") || utils::strmatch(ifix->style, "^lineforce") ||
-        utils::strmatch(ifix->style, "^planeforce") || utils::strmatch(ifix->style, "^enforce2d"))
+    if (projects)
       projections.push_back(ifix);
-    else
+    else if (mask & POST_FORCE)
       ++nadders;
   }
   sampler.set_hooks(preparations, projections);
+}
+
+/* ----------------------------------------------------------------------
+   fixes that set, average or project the forces instead of adding to them
+------------------------------------------------------------------------- */
+
+bool OtherFixes::replaces_forces(const Fix *fix)
+{
+  for (const char *style :
+       {"^setforce", "^aveforce", "^freeze", "^lineforce", "^planeforce", "^enforce2d"})
+    if (utils::strmatch(fix->style, style)) return true;
+  return false;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -52,6 +52,8 @@ namespace PEJump {
     // time integrator (collective)
     void refuse_interactions(const char *rule_name) const;
 
+    static bool replaces_forces(const Fix *);
+
    private:
     Fix *self;
     int nadders;        // fixes that add forces
