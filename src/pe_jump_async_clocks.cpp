@@ -34,14 +34,6 @@ double *AsyncClocks::times() const
   return state.val(TIME);
 }
 
-/* ---------------------------------------------------------------------- */
-
-double AsyncClocks::time_of(int i) const
-{
-  const double t = times()[i];
-  return (t == MOVING) ? tnow : t;
-}
-
 /* ----------------------------------------------------------------------
    the scheme starts a new coarse step: the atoms that sit out fine steps
    (caught up) are at its start

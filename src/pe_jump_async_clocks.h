@@ -46,10 +46,10 @@ namespace PEJump {
     bool restore(const double *list);    // restart data (K, fine steps, time): K the same?
     void save(double *list) const;
 
-    // per atom: its time (now() if it moves), hold it at now(), catch it
-    // up to now() with free-flight velocity v (it then moves if moving)
+    // per atom: its time (MOVING if it moves with the fine steps), hold it
+    // at now(), catch it up to now() with free-flight velocity v (it then
+    // moves if moving)
     double *times() const;
-    double time_of(int i) const;
     void hold(int i);
     void catch_up(int i, const FreeFlight &v, bool moving);
     void catch_up_all(const FreeFlight &v, const int *moving);

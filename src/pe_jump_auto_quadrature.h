@@ -35,7 +35,6 @@ namespace PEJump {
     AutoQuadrature(class LAMMPS *, const std::string &fix_id, double tol);
     ~AutoQuadrature() override;
 
-    const Quadrature &finest() const { return rules.finest(); }
     void create_compute();                          // post_constructor()
     void check_compute(const char *style) const;    // init()
     void start_run(NodeSampler &, int mask);        // setup(): V(q^n)
