@@ -720,12 +720,9 @@ void FixPEJump::jump_loop(const AtomList *only, double **favg, double rest, doub
   const double *rmass = atom->rmass;
   const double *minv = inverse_mass.data();
   const int *type = atom->type;
-  const int n = only ? static_cast<int>(only->size()) : atom->nlocal;
   const double kick = 2.0 * h_step * force->ftm2v;
   double vv = mag[0], jj = mag[1];
-  for (int ii = 0; ii < n; ii++) {
-    const int i = only ? (*only)[ii] : ii;
-    if (!only && !(mask[i] & groupbit)) continue;
+  const auto one = [&](int i) {
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
     double vh[3] = {v[i][0], v[i][1], v[i][2]};
     double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
@@ -733,20 +730,25 @@ void FixPEJump::jump_loop(const AtomList *only, double **favg, double rest, doub
     for (int k = 0; k < 3; k++) {
       double xk = x[i][k] + rest * vh[k];
       vnew[k] = jump_component(dtfm * favg[i][k], vh[k], jmp[k]);
-      if (vsig) v[i][k] = vh[k];    // the node velocity, for the fingerprint
       if (ahead >= 0.0) {
         vh[k] += 0.5 * jmp[k];
         xk += ahead * vh[k];
       }
       x[i][k] = xk;
+      v[i][k] = vh[k];
       jump[i][k] = jmp[k];
       if (fstart) fstart[i][k] = fsample[i][k];
     }
+    // (no fingerprint when a step begins ahead: nothing may change v then)
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
-    for (int k = 0; k < 3; k++) v[i][k] = vh[k];
     vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
     jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
-  }
+  };
+  if (only)
+    for (const int i : *only) one(i);
+  else
+    for (int i = 0; i < atom->nlocal; i++)
+      if (mask[i] & groupbit) one(i);
   mag[0] = vv;
   mag[1] = jj;
 }
