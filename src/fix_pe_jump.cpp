@@ -41,6 +41,7 @@
 #include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_step_control.h"
+#include "pe_jump_two_step.h"
 #include "timer.h"
 #include "update.h"
 
@@ -89,9 +90,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
 
   // the per-atom state; step control adds the force history it needs
   state = new AtomState(lmp);
-  JUMP = state->add("jump", 3, 0.0);
-  VSIG = state->add("vsig", 1, 0.0);
-  FSTART = rule->has_end_nodes() ? state->add("fstart", 3, std::nan("")) : -1;
+  scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
   const bool compensate = (opts.compensate < 0) ? (opts.adapt_eps > 0.0) : (opts.compensate != 0);
   steps =
       new StepControl(lmp, *state, opts.adapt_eps, opts.adapt_dtmin, opts.adapt_dtmax, compensate);
@@ -115,7 +114,6 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   eflag_step = vflag_step = 0;
   h_step = 0.0;
   evals_step = evals_total = 0.0;
-  cached_step = -1;
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
   fresh_atoms = 0;
@@ -152,6 +150,7 @@ FixPEJump::~FixPEJump()
   memory->destroy(fsample);
   delete[] extlist;
   delete steps;
+  delete scheme;
   delete state;
   delete others;
   delete damping;
@@ -175,33 +174,15 @@ int FixPEJump::setmask()
 
 void FixPEJump::init()
 {
-  if (utils::strmatch(update->integrate_style, "^respa"))
-    error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
-  // the jump relation needs a step that goes forward: with h = 0 it flips
-  // the jump every step, and a change of sign excites the parasitic mode
-  if (!(update->dt > 0.0))
-    error->all(FLERR,
-               "Fix {} needs a timestep > 0, got {}: to run backwards in time, reverse the "
-               "velocities instead (variable rx atom -vx, likewise ry and rz, then velocity all "
-               "set v_rx v_ry v_rz), which the fix continues exactly",
-               style, update->dt);
+  scheme->init(style);
   if (steps->adapts())
     for (const auto &ifix : modify->get_fix_list())
       if (utils::strmatch(ifix->style, "^dt/reset"))
         error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them",
                    style, ifix->id, ifix->style);
-  if (atom->torque_flag)
-    error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
-               atom->atom_style);
 
   others->sort(*sampler);
   maxexchange = state->values();
-  // 1/m per type, as the jump loops take it (a division per atom costs
-  // more than the rest of the update)
-  inverse_mass.assign(atom->ntypes + 1, 0.0);
-  if (atom->mass)
-    for (int t = 1; t <= atom->ntypes; t++)
-      if (atom->mass[t] > 0.0) inverse_mass[t] = 1.0 / atom->mass[t];
 
   // forces that the rule does not integrate (other fixes that add forces,
   // contributions left out by sample) act as impulses at the primary node:
@@ -249,7 +230,7 @@ void FixPEJump::setup(int /*vflag*/)
   guard->start_run();
   opened_ahead = 0;
   evals_step = 0.0;
-  agree_on_started();
+  started = scheme->agree_on_started(started, group_atoms(), style);
   if (!started) {
     start_scheme(nullptr, true);
   } else {
@@ -306,44 +287,13 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   open_steps();
   if (steps->keeps_history()) {
     grow_work();
-    if (steps->compensate(h_step, group_atoms(), atom->v, field(JUMP), fsum)) {
-      cached_step = -1;
+    if (steps->compensate(h_step, group_atoms(), atom->v, scheme->jump(), fsum)) {
+      scheme->forget_energies();
       guard->forget_stats();
     }
   }
   check_lists();
   advance(rule->node[rule->primary()] * h_step);
-}
-
-/* ----------------------------------------------------------------------
-   restart data that does not fit the fix clears started only on the ranks
-   that own atoms: every rank must take the same decision
-------------------------------------------------------------------------- */
-
-void FixPEJump::agree_on_started()
-{
-  int all_started = 0;
-  MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
-  if ((all_started < 0) && (comm->me == 0))
-    utils::logmesg(lmp,
-                   "Fix {}: the per-atom state in the restart file does not fit this fix "
-                   "(written with other settings or by another version): the two-step scheme "
-                   "restarts from the current state\n",
-                   style);
-  started = (all_started > 0) ? 1 : 0;
-
-  // velocities that are not finite (a velocity command gone wrong, e.g.
-  // velocity scale to a negative temperature) would only show up later
-  double **v = atom->v;
-  bigint bad = 0, all_bad = 0;
-  for_atoms(nullptr, [&](int i) {
-    if (!(std::isfinite(v[i][0]) && std::isfinite(v[i][1]) && std::isfinite(v[i][2]))) ++bad;
-  });
-  MPI_Allreduce(&bad, &all_bad, 1, MPI_LMP_BIGINT, MPI_SUM, world);
-  if (all_bad)
-    error->all(FLERR,
-               "Fix {}: {} atoms have velocities that are not finite at the start of the run",
-               style, all_bad);
 }
 
 /* ----------------------------------------------------------------------
@@ -358,13 +308,7 @@ void FixPEJump::agree_on_started()
 void FixPEJump::node_impulses()
 {
   if (!watch(OtherFixes::BETWEEN_STEPS)) return;
-  double **v = atom->v;
-  const double *vsig = state->val(VSIG);
-  bool changed = false;
-  for_atoms(nullptr, [&](int i) {
-    if (PEJump::velocity_fingerprint(v[i]) != vsig[i]) changed = true;
-  });
-  if (!changed) return;
+  if (!scheme->any_changed(group_atoms())) return;
   damping->impulse_here();
   // the speeds taken at the end of the last step no longer bound the
   // excursion of this step's nodes
@@ -380,14 +324,14 @@ void FixPEJump::open_steps()
 {
   double **v = atom->v;
   double **f = atom->f;
-  double **jump = field(JUMP);
-  double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
+  double **jump = scheme->jump();
+  double **fstart = scheme->fstart();
   const bool half_kick = split_primary() && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
   for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
     if (half_kick && !std::isnan(fstart[i][0])) {
-      const double dtfm = dth * inverse_mass_of(i);
+      const double dtfm = dth * scheme->inverse_mass_of(i);
       for (int k = 0; k < 3; k++) v[i][k] += dtfm * (f[i][k] - fstart[i][k]);
     }
   });
@@ -405,7 +349,7 @@ bool FixPEJump::watch(int when) const
 
 PEJump::FreeFlight FixPEJump::free_flight() const
 {
-  return {atom->v, field(JUMP), nullptr, before_open != 0};
+  return {atom->v, scheme->jump(), nullptr, before_open != 0};
 }
 
 /* ----------------------------------------------------------------------
@@ -427,7 +371,7 @@ void FixPEJump::open_and_advance(double t)
 {
   double **x = atom->x;
   double **v = atom->v;
-  double **jump = field(JUMP);
+  double **jump = scheme->jump();
   const double now = advance_now(t);
   for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++) {
@@ -518,27 +462,6 @@ int FixPEJump::owned_atoms() const
 
 /* ---------------------------------------------------------------------- */
 
-double **FixPEJump::field(int which) const
-{
-  return state->vec(which);
-}
-
-/* ---------------------------------------------------------------------- */
-
-bool FixPEJump::velocity_changed(int i) const
-{
-  return PEJump::velocity_fingerprint(atom->v[i]) != state->val(VSIG)[i];
-}
-
-/* ---------------------------------------------------------------------- */
-
-void FixPEJump::mark_velocity(int i)
-{
-  state->val(VSIG)[i] = PEJump::velocity_fingerprint(atom->v[i]);
-}
-
-/* ---------------------------------------------------------------------- */
-
 bool FixPEJump::split_primary() const
 {
   const int present = sampler->present();
@@ -558,13 +481,6 @@ bool FixPEJump::use_copy() const
 AtomSet FixPEJump::group_atoms(const AtomList *only) const
 {
   return {groupbit, only};
-}
-
-/* ---------------------------------------------------------------------- */
-
-double FixPEJump::inverse_mass_of(int i) const
-{
-  return atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]];
 }
 
 /* ----------------------------------------------------------------------
@@ -627,7 +543,9 @@ void FixPEJump::final_integrate()
   double mag[2] = {0.0, 0.0};
   opened_ahead = may_open_ahead();
   if (opened_ahead)
-    jump_loop(nullptr, favg, rest, rule->node[rule->primary()] * update->dt, nullptr, nullptr, mag);
+    scheme->jump_loop(group_atoms(), favg,
+                      {h_step, rest, rule->node[rule->primary()] * update->dt, nullptr, false},
+                      mag);
   else
     finish_step(nullptr, favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
@@ -636,7 +554,7 @@ void FixPEJump::final_integrate()
   if (others->integrate_others() && (neighbor->ago == 0) && !nodes_at_step_ends(*rule))
     others->refuse_interactions(rule->name().c_str());
   evals_total += evals_step;
-  cached_step = -1;
+  scheme->forget_energies();
   steps->step_done(h_step);
 }
 
@@ -653,11 +571,12 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   double **x = atom->x;
   double **v = atom->v;
   double **f = atom->f;
-  double **jump = field(JUMP);
+  double **jump = scheme->jump();
   const bool keep_start = rule->has_end_nodes();
-  double **fstart = keep_start ? field(FSTART) : nullptr;
+  double **fstart = scheme->fstart();
   double **fhist = only ? nullptr : steps->next_history();
-  double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? state->val(VSIG) : nullptr;
+  const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS);
+  double *vsig = fingerprint ? scheme->vsig() : nullptr;
   const double kick = 2.0 * h_step * force->ftm2v;
   // forces not integrated by the rule: an impulse at the centre of the step
   // (position Verlet), or at its end node half now and half at the start of
@@ -668,16 +587,14 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
   const double beta = damping->beta(h_step);
   if (!centre_kick && !end_kick && (beta == 0.0) && !fhist) {
-    jump_loop(only, favg, rest, -1.0, fstart, vsig, mag);
+    scheme->jump_loop(group_atoms(only), favg,
+                      {h_step, rest, -1.0, keep_start ? fsample : nullptr, fingerprint}, mag);
     return;
   }
   double vv = mag[0], jj = mag[1];
-  const double *rmass = atom->rmass;
-  const double *minv = inverse_mass.data();
-  const int *type = atom->type;
   // per atom in registers (the arrays may alias for all the compiler knows)
   const auto one = [&](int i) {
-    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
+    const double dtfm = kick * scheme->inverse_mass_of(i);
     double vh[3] = {v[i][0], v[i][1], v[i][2]};    // v^{n+1/2}
     double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
     double vnew[3];
@@ -686,7 +603,8 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
       x[i][k] += rest * vh[k];
       if (beta > 0.0) jmp[k] *= 1.0 - beta;
       if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
-      vnew[k] = jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
+      vnew[k] =
+          PEJump::TwoStep::jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
       v[i][k] = vh[k];
       jump[i][k] = jmp[k];
       if (keep_start) fstart[i][k] = fsample[i][k];
@@ -697,58 +615,6 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
     jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
   };
   for_atoms(only, one);
-  mag[0] = vv;
-  mag[1] = jj;
-}
-
-/* ----------------------------------------------------------------------
-   finish_step() without impulses, damping or force history, as one plain
-   loop over the atoms of the group (or those listed in only): the jump,
-   the move on by rest, the start-node force (fstart, if given), the
-   velocity fingerprint (vsig, if given); with ahead >= 0 also the next
-   step's open_steps() and advance() by ahead, in the same operations as
-   those in turn
-------------------------------------------------------------------------- */
-
-void FixPEJump::jump_loop(const AtomList *only, double **favg, double rest, double ahead,
-                          double **fstart, double *vsig, double *mag)
-{
-  double **x = atom->x;
-  double **v = atom->v;
-  double **jump = field(JUMP);
-  const int *mask = atom->mask;
-  const double *rmass = atom->rmass;
-  const double *minv = inverse_mass.data();
-  const int *type = atom->type;
-  const double kick = 2.0 * h_step * force->ftm2v;
-  double vv = mag[0], jj = mag[1];
-  const auto one = [&](int i) {
-    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
-    double vh[3] = {v[i][0], v[i][1], v[i][2]};
-    double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
-    double vnew[3];
-    for (int k = 0; k < 3; k++) {
-      double xk = x[i][k] + rest * vh[k];
-      vnew[k] = jump_component(dtfm * favg[i][k], vh[k], jmp[k]);
-      if (ahead >= 0.0) {
-        vh[k] += 0.5 * jmp[k];
-        xk += ahead * vh[k];
-      }
-      x[i][k] = xk;
-      v[i][k] = vh[k];
-      jump[i][k] = jmp[k];
-      if (fstart) fstart[i][k] = fsample[i][k];
-    }
-    // (no fingerprint when a step begins ahead: nothing may change v then)
-    if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
-    vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
-    jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
-  };
-  if (only)
-    for (const int i : *only) one(i);
-  else
-    for (int i = 0; i < atom->nlocal; i++)
-      if (mask[i] & groupbit) one(i);
   mag[0] = vv;
   mag[1] = jj;
 }
@@ -766,19 +632,6 @@ bool FixPEJump::may_open_ahead() const
   return (rule->size() == 1) && !split_primary() && !steps->keeps_history() && !damping->active() &&
       neighbor->dist_check && !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) &&
       !others->step_observed() && !timer->has_timeout();
-}
-
-/* ---------------------------------------------------------------------- */
-
-void FixPEJump::jump_atom(int i, double h, const double *favg, double *mag)
-{
-  const double dtfm = 2.0 * h * force->ftm2v * inverse_mass_of(i);
-  double *v = atom->v[i];
-  double *jmp = field(JUMP)[i];
-  double vnew[3];
-  for (int k = 0; k < 3; k++) vnew[k] = jump_component(dtfm * favg[k], v[k], jmp[k]);
-  mag[0] = MAX(mag[0], vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
-  mag[1] = MAX(mag[1], jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
 }
 
 /* ----------------------------------------------------------------------
@@ -807,9 +660,7 @@ void FixPEJump::tally_at_node()
 void FixPEJump::post_run()
 {
   // the velocities as the run leaves them, for the next run to compare
-  for_atoms(nullptr, [&](int i) {
-    mark_velocity(i);
-  });
+  scheme->mark_all(group_atoms());
 
   if (automatic) automatic->report(style);
 }
@@ -818,7 +669,7 @@ void FixPEJump::post_run()
 
 void FixPEJump::end_of_step()
 {
-  if (steps->adapts()) steps->choose_next(group_atoms(), fsum, field(JUMP));
+  if (steps->adapts()) steps->choose_next(group_atoms(), fsum, scheme->jump());
 }
 
 /* ----------------------------------------------------------------------
@@ -843,17 +694,9 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
     primary_sampled_force();
 
   // the jump takes the forces that the rule integrates
-  double **v = atom->v;
-  double **f = split_primary() ? fsample : atom->f;
-  double **jump = field(JUMP);
-  const double *rmass = atom->rmass;
-  const double *mass = atom->mass;
-  const int *type = atom->type;
-  const double kick = (opts.init_style == PEJump::Options::KICK) ? force->ftm2v : 0.0;
-  for_atoms(nullptr, [&](int i) {
-    const double dtfm = kick * kick_step(i) / (rmass ? rmass[i] : mass[type[i]]);
-    for (int k = 0; k < 3; k++) jump[i][k] = dtfm * f[i][k];
-    mark_velocity(i);
+  const double kick = (opts.init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
+  scheme->start(group_atoms(), split_primary() ? fsample : atom->f, kick, [&](int i) {
+    return kick_step(i);
   });
 
   // fixes defined after this one act on the forces after its setup(): redo
@@ -864,7 +707,6 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   started = 1;
   steps->forget();
   guard->forget_stats();
-  cached_step = -1;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -881,7 +723,7 @@ double FixPEJump::kick_step(int /*i*/) const
 void FixPEJump::store_start_node()
 {
   primary_sampled_force();
-  double **fstart = field(FSTART);
+  double **fstart = scheme->fstart();
   for_atoms(nullptr, [&](int i) {
     for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
   });
@@ -939,15 +781,15 @@ void FixPEJump::refresh_start_nodes()
 
   // the new atoms (start node still unknown) also get the initial kick
   AtomList fresh;
-  double **fstart = field(FSTART);
+  double **fstart = scheme->fstart();
   for_atoms(nullptr, [&](int i) {
     if (std::isnan(fstart[i][0])) fresh.push_back(i);
   });
   store_start_node();
   if (opts.init_style != PEJump::Options::KICK) return;
-  double **jump = field(JUMP);
+  double **jump = scheme->jump();
   for (const int i : fresh) {
-    const double dtfm = force->ftm2v * update->dt * inverse_mass_of(i);
+    const double dtfm = force->ftm2v * update->dt * scheme->inverse_mass_of(i);
     for (int k = 0; k < 3; k++) jump[i][k] = dtfm * fstart[i][k];
   }
 }
@@ -968,7 +810,7 @@ void FixPEJump::quadrature_sum(const AtomList *only)
   const int p = rule->primary();
   const double wp = rule->weight[p];
   const int reuse_start = rule->has_end_nodes();
-  double **fstart = reuse_start ? field(FSTART) : nullptr;
+  double **fstart = scheme->fstart();
 
   if (split_primary() || reuse_start) primary_sampled_force();
 
@@ -1004,7 +846,7 @@ void FixPEJump::quadrature_sum(const AtomList *only)
 
 void FixPEJump::auto_quadrature_sum()
 {
-  double **fstart = field(FSTART);
+  double **fstart = scheme->fstart();
   primary_sampled_force();    // F(q^{n+1}) into fsample
   for_atoms(nullptr, [&](int i) {
     if (std::isnan(fstart[i][0]))
@@ -1057,7 +899,7 @@ void FixPEJump::check_excursion(double lo, double hi)
     if (xhold) local[0] = guard->excursion(group_atoms(), free_flight(), xhold, lo, hi);
   } else {
     const StabilityGuard::Nodes at{h_step, lo, hi, cp, nullptr, 0.0, 0.0, 0.0, nullptr};
-    guard->measure(group_atoms(), free_flight(), field(JUMP), xhold, at, local);
+    guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
   }
   finish_check(local);
 }
@@ -1078,11 +920,11 @@ void FixPEJump::finish_check(const double *local)
 
   switch (guard->judge(global)) {
     case StabilityGuard::UNSTABLE:
-      energies();
       error->all(FLERR,
                  "Fix {} is unstable at step {}: the momentum jumps grew {:.3g}-fold since the "
                  "start of the run (jump energy {:.8g}). {}",
-                 style, update->ntimestep, guard->growth(), cached[1], instability_advice());
+                 style, update->ntimestep, guard->growth(), scheme->energies(group_atoms())[1],
+                 instability_advice());
       break;
     case StabilityGuard::TOO_FAR:
       error->all(FLERR,
@@ -1125,24 +967,7 @@ std::string FixPEJump::instability_advice() const
 
 int FixPEJump::detect_velocity_change()
 {
-  double **v = atom->v;
-  const double *vsig = state->val(VSIG);
-
-  int local[2] = {0, 0};    // some differ, some are not reversed
-  for_atoms(nullptr, [&](int i) {
-    const double back[3] = {-v[i][0], -v[i][1], -v[i][2]};
-    if (PEJump::velocity_fingerprint(v[i]) != vsig[i]) local[0] = 1;
-    if (PEJump::velocity_fingerprint(back) != vsig[i]) local[1] = 1;
-  });
-  int global[2];
-  MPI_Allreduce(local, global, 2, MPI_INT, MPI_MAX, world);
-  if (!global[0]) return 0;
-  if (global[1] || !can_reverse()) return 2;
-  for_atoms(nullptr, [&](int i) {
-    mark_velocity(i);
-  });
-  cached_step = -1;
-  return 1;
+  return scheme->velocity_change(group_atoms(), can_reverse());
 }
 
 /* ----------------------------------------------------------------------
@@ -1157,8 +982,7 @@ double FixPEJump::pseudo_energy_now()
     const double volume = domain->xprd * domain->yprd * domain->zprd;
     pe += force->pair->etail / volume;
   }
-  energies();
-  return pe + cached[0];
+  return pe + scheme->energies(group_atoms())[0];
 }
 
 /* ----------------------------------------------------------------------
@@ -1169,32 +993,6 @@ double FixPEJump::pseudo_energy_now()
 double FixPEJump::potential_now(int mask)
 {
   return nodes->potential(mask);
-}
-
-/* ----------------------------------------------------------------------
-   pseudo-kinetic energy (1/2) sum m v^{n-1/2}.v^{n+1/2} and jump energy
-   (1/8) sum m |[v]^n|^2 of the fix group
-------------------------------------------------------------------------- */
-
-void FixPEJump::energies()
-{
-  if (cached_step == update->ntimestep) return;
-
-  double **v = atom->v;
-  double **jump = field(JUMP);
-  double local[2] = {0.0, 0.0};
-  for_atoms(nullptr, [&](int i) {
-    const double m = atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
-    // with v^{n+1/2} = v^n + [v]^n/2: v^{n-1/2}.v^{n+1/2} = |v^n|^2 - |[v]^n|^2/4
-    for (int k = 0; k < 3; k++) {
-      local[0] += m * (v[i][k] * v[i][k] - 0.25 * jump[i][k] * jump[i][k]);
-      local[1] += m * jump[i][k] * jump[i][k];
-    }
-  });
-  MPI_Allreduce(local, cached, 2, MPI_DOUBLE, MPI_SUM, world);
-  cached[0] *= 0.5 * force->mvv2e;
-  cached[1] *= 0.125 * force->mvv2e;
-  cached_step = update->ntimestep;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1211,8 +1009,7 @@ double FixPEJump::compute_vector(int n)
   switch (n) {
     case 0:
     case 1:
-      energies();
-      return cached[n];
+      return scheme->energies(group_atoms())[n];
     case 2:
       return update->dt;
     case 3:
@@ -1266,7 +1063,7 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
 void FixPEJump::set_arrays(int i)
 {
   state->reset(i);
-  mark_velocity(i);
+  scheme->mark(i);
   fresh_atoms = 1;
 }
 
@@ -1332,7 +1129,7 @@ void FixPEJump::restart(char *buf)
 int FixPEJump::pack_restart(int i, double *buf)
 {
   // written during a run: the velocities are the fix's own
-  if (update->whichflag) mark_velocity(i);
+  if (update->whichflag) scheme->mark(i);
   buf[0] = state->values() + 1;
   state->pack(i, &buf[1]);
   return state->values() + 1;

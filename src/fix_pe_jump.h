@@ -37,6 +37,7 @@ namespace PEJump {
   class Quadrature;
   class StabilityGuard;
   class StepControl;
+  class TwoStep;
 }    // namespace PEJump
 
 class FixPEJump : public Fix {
@@ -94,28 +95,7 @@ class FixPEJump : public Fix {
   PEJump::StabilityGuard *guard;
   PEJump::OtherFixes *others;
 
-  // per-atom state fields: the jump [v]^n, a fingerprint of the velocity
-  // the fix left in atom->v (a velocity found different was changed by
-  // someone else), and (Lobatto rules) the sampled force at the start node.
-  // Between its steps an atom's atom->v is its node velocity v^n; inside
-  // them, its free-flight velocity v^{n+1/2} = v^n + [v]^n/2.
-  int JUMP, VSIG, FSTART;
-  double **field(int which) const;
-
-  // one component of the two-step update: with vh = v^{n+1/2} and jmp =
-  // [v]^n on entry and dfavg = 2 h <F>/m, vh becomes the node velocity
-  // v^{n+1} and jmp the jump [v]^{n+1}, stored as 2 (v^{n+3/2} - v^{n+1}) so
-  // that v^{n+1} + jmp/2 gives v^{n+3/2} back; returns v^{n+3/2}
-  static double jump_component(double dfavg, double &vh, double &jmp)
-  {
-    jmp = dfavg - jmp;
-    const double vnew = vh + jmp;
-    vh = vnew - 0.5 * jmp;
-    jmp = 2.0 * (vnew - vh);
-    return vnew;
-  }
-  bool velocity_changed(int i) const;
-  void mark_velocity(int i);
+  PEJump::TwoStep *scheme;    // the per-atom state and updates of the two-step scheme
 
   PEJump::Options opts;    // the keywords
   PEJump::ParasiticDamping *damping;
@@ -135,8 +115,6 @@ class FixPEJump : public Fix {
   double h_step;    // step size used in the current step
 
   double evals_step, evals_total;    // force evaluations (units of full ones)
-  bigint cached_step;
-  double cached[2];    // pseudo-kinetic and jump energy at cached_step
 
   PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
   // forces not integrated by the rule (other fixes that add forces,
@@ -146,7 +124,6 @@ class FixPEJump : public Fix {
   bool split_primary() const;
   bool use_copy() const;
   virtual void start_scheme(const char *, bool);
-  void agree_on_started();
   virtual void node_impulses();
   virtual void open_steps();                 // v^n -> v^{n+1/2} of the atoms whose step begins
   virtual bool open_while_moving() const;    // open_steps() and advance() may be one pass
@@ -155,8 +132,6 @@ class FixPEJump : public Fix {
   bool watch(int when) const;      // other fixes may change velocities then (OtherFixes hooks)
   virtual PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
   void refresh_start_nodes();
-  double inverse_mass_of(int) const;
-  std::vector<double> inverse_mass;    // per atom type, set in init()
   void primary_sampled_force();
   void project_sampled();
   void quadrature_sum(const AtomList *only);    // only: the atoms that move to the nodes
@@ -166,7 +141,6 @@ class FixPEJump : public Fix {
   void tally_at_node();
   bool rebuild_due() const;
   bool tally_step() const;
-  void energies();
   void grow_work();
   int detect_velocity_change();
   double pseudo_energy_now();
@@ -181,15 +155,7 @@ class FixPEJump : public Fix {
   const int *atom_mask() const;    // atom->mask, atom->nlocal (the header
   int owned_atoms() const;         // needs no definition of class Atom)
 
-  // two-step update of owned atom i (v its free-flight velocity v^{n+1/2})
-  // with the quadrature sum favg of the forces over a step of size h:
-  // [v]^{n+1} = 2 h favg / m - [v]^n, v^{n+3/2} = v^{n+1/2} + [v]^{n+1};
-  // v becomes the node velocity v^{n+1} = v^{n+3/2} - [v]^{n+1}/2.
-  // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
-  void jump_atom(int i, double h, const double *favg, double *mag);
   void finish_step(const AtomList *only, double **favg, double rest, double *mag);
-  void jump_loop(const AtomList *only, double **favg, double rest, double ahead, double **fstart,
-                 double *vsig, double *mag);
   bool may_open_ahead() const;
 
   // hooks for derived styles

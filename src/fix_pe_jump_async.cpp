@@ -47,6 +47,7 @@
 #include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_step_control.h"
+#include "pe_jump_two_step.h"
 #include "update.h"
 
 #include <cmath>
@@ -329,7 +330,7 @@ void FixPEJumpAsync::node_impulses()
 void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
 {
   double **v = atom->v;
-  const double *vsig = state->val(VSIG);
+  const double *vsig = scheme->vsig();
   for_atoms(only, [&](int i) {
     if (PEJump::velocity_fingerprint(v[i]) != vsig[i]) changes_seen = 1;
   });
@@ -343,8 +344,8 @@ void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
 void FixPEJumpAsync::open_steps()
 {
   double **v = atom->v;
-  double **jump = field(JUMP);
-  double *vsig = watch(OtherFixes::INSIDE_STEP) ? state->val(VSIG) : nullptr;
+  double **jump = scheme->jump();
+  double *vsig = watch(OtherFixes::INSIDE_STEP) ? scheme->vsig() : nullptr;
   for (const int i : fast_atoms) {
     for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
@@ -358,7 +359,7 @@ void FixPEJumpAsync::open_steps()
 
 PEJump::FreeFlight FixPEJumpAsync::free_flight() const
 {
-  return {atom->v, field(JUMP), slow.data()};
+  return {atom->v, scheme->jump(), slow.data()};
 }
 
 /* ----------------------------------------------------------------------
@@ -448,7 +449,7 @@ void FixPEJumpAsync::slow_magnitudes()
 {
   stats_slow[0] = stats_slow[1] = 0.0;
   double **v = atom->v;
-  double **jump = field(JUMP);
+  double **jump = scheme->jump();
   for (const int i : slow_atoms) {
     double vv = 0.0, jj = 0.0;
     for (int k = 0; k < 3; k++) {
@@ -501,7 +502,7 @@ void FixPEJumpAsync::advance(double t)
 
 void FixPEJumpAsync::setup(int vflag)
 {
-  agree_on_started();
+  started = scheme->agree_on_started(started, group_atoms(), style);
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
@@ -536,7 +537,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   catch_up_all();
   if (with_start) {
     clocks->begin_coarse();
-    double **facc = field(FACC);
+    double **facc = state->vec(FACC);
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
   }
@@ -581,8 +582,8 @@ std::string FixPEJumpAsync::instability_advice() const
 void FixPEJumpAsync::store_start_node()
 {
   double **f = atom->f;
-  double **fstart = field(FSTART);
-  double **fstart_coarse = field(FSTART_COARSE);
+  double **fstart = scheme->fstart();
+  double **fstart_coarse = state->vec(FSTART_COARSE);
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   NodeSampler::Keep keep(*nodes);
@@ -689,7 +690,7 @@ void FixPEJumpAsync::check_lists()
     at.hi2 = rule->node.back() * span - elapsed;
     at.lag = lag.data();
   }
-  guard->measure(group_atoms(), free_flight(), field(JUMP), xhold, at, local);
+  guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
   finish_check(local);
 }
 
@@ -702,7 +703,7 @@ void FixPEJumpAsync::check_lists()
 void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 {
   const int reuse_start = rule->has_end_nodes();
-  double **fstart_coarse = reuse_start ? field(FSTART_COARSE) : nullptr;
+  double **fstart_coarse = reuse_start ? state->vec(FSTART_COARSE) : nullptr;
   for (const int i : slow_atoms) {
     for (int k = 0; k < 3; k++)
       fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
@@ -763,7 +764,7 @@ void FixPEJumpAsync::final_integrate()
   tally_at_node();
   split->restore();
   evals_total += evals_step;
-  cached_step = -1;
+  scheme->forget_energies();
 
   // the labels are output only: take them where something looks, when
   // tally_at_node() has brought the ghosts to the node
@@ -782,12 +783,12 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
   double **x = atom->x;
   double **v = atom->v;
   double **f = atom->f;
-  double **jump = field(JUMP);
-  double **facc = field(FACC);
-  double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
+  double **jump = scheme->jump();
+  double **facc = state->vec(FACC);
+  double **fstart = scheme->fstart();
   double *tpos = clocks->times();
   const PEJump::FreeFlight vhalf = free_flight();
-  double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? state->val(VSIG) : nullptr;
+  double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? scheme->vsig() : nullptr;
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const double coarse_step = clocks->start() + h_step;
   const auto one = [&](int i) {
@@ -798,7 +799,7 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
     // interior slow atoms have no fine interactions: only other fixes' forces
     const double *fa = moving[i] ? favg[i] : f[i];
     if (!slow[i]) {
-      jump_atom(i, h_step, fa, mag[0]);
+      scheme->jump_atom(i, h_step, fa, mag[0]);
     } else {
       double fslow[3];
       for (int k = 0; k < 3; k++) {
@@ -806,7 +807,7 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
         facc[i][k] = 0.0;
       }
       for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];    // into its step
-      jump_atom(i, coarse_step, fslow, mag[1]);
+      scheme->jump_atom(i, coarse_step, fslow, mag[1]);
     }
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
     tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
@@ -826,8 +827,8 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
 {
   double **x = atom->x;
   double **f = atom->f;
-  double **facc = field(FACC);
-  double **fstart = rule->has_end_nodes() ? field(FSTART) : nullptr;
+  double **facc = state->vec(FACC);
+  double **fstart = scheme->fstart();
   const PEJump::FreeFlight vhalf = free_flight();
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   finish_step(&fast_atoms, favg, rest, mag);

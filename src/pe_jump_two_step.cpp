@@ -1,0 +1,289 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#include "pe_jump_two_step.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "error.h"
+#include "force.h"
+#include "pe_jump_atom_state.h"
+#include "update.h"
+
+#include <cmath>
+
+using namespace LAMMPS_NS;
+using namespace LAMMPS_NS::PEJump;
+
+/* ---------------------------------------------------------------------- */
+
+TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
+    Pointers(lmp), state(table), cached_step(-1), cached{0.0, 0.0}
+{
+  JUMP = state.add("jump", 3, 0.0);
+  VSIG = state.add("vsig", 1, 0.0);
+  FSTART = start_nodes ? state.add("fstart", 3, std::nan("")) : -1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **TwoStep::jump() const
+{
+  return state.vec(JUMP);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double *TwoStep::vsig() const
+{
+  return state.val(VSIG);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **TwoStep::fstart() const
+{
+  return (FSTART >= 0) ? state.vec(FSTART) : nullptr;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::init(const char *style)
+{
+  if (utils::strmatch(update->integrate_style, "^respa"))
+    error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
+  // the jump relation needs a step that goes forward: with h = 0 it flips
+  // the jump every step, and a change of sign excites the parasitic mode
+  if (!(update->dt > 0.0))
+    error->all(FLERR,
+               "Fix {} needs a timestep > 0, got {}: to run backwards in time, reverse the "
+               "velocities instead (variable rx atom -vx, likewise ry and rz, then velocity all "
+               "set v_rx v_ry v_rz), which the fix continues exactly",
+               style, update->dt);
+  if (atom->torque_flag)
+    error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
+               atom->atom_style);
+
+  // a division per atom costs more than the rest of the update
+  inverse_mass.assign(atom->ntypes + 1, 0.0);
+  if (atom->mass)
+    for (int t = 1; t <= atom->ntypes; t++)
+      if (atom->mass[t] > 0.0) inverse_mass[t] = 1.0 / atom->mass[t];
+}
+
+/* ---------------------------------------------------------------------- */
+
+double TwoStep::inverse_mass_of(int i) const
+{
+  return atom->rmass ? 1.0 / atom->rmass[i] : inverse_mass[atom->type[i]];
+}
+
+/* ----------------------------------------------------------------------
+   restart data that does not fit the fix clears started only on the ranks
+   that own atoms: every rank must take the same decision
+------------------------------------------------------------------------- */
+
+int TwoStep::agree_on_started(int started, const AtomSet &set, const char *style) const
+{
+  int all_started = 0;
+  MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
+  if ((all_started < 0) && (comm->me == 0))
+    utils::logmesg(lmp,
+                   "Fix {}: the per-atom state in the restart file does not fit this fix "
+                   "(written with other settings or by another version): the two-step scheme "
+                   "restarts from the current state\n",
+                   style);
+
+  // velocities that are not finite (a velocity command gone wrong, e.g.
+  // velocity scale to a negative temperature) would only show up later
+  double **v = atom->v;
+  bigint bad = 0, all_bad = 0;
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    if (!(std::isfinite(v[i][0]) && std::isfinite(v[i][1]) && std::isfinite(v[i][2]))) ++bad;
+  });
+  MPI_Allreduce(&bad, &all_bad, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (all_bad)
+    error->all(FLERR,
+               "Fix {}: {} atoms have velocities that are not finite at the start of the run",
+               style, all_bad);
+  return (all_started > 0) ? 1 : 0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::start(const AtomSet &set, double **f, double scale,
+                    const std::function<double(int)> &step)
+{
+  double **jmp = jump();
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    const double m = atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
+    const double dtfm = scale * force->ftm2v * step(i) / m;
+    for (int k = 0; k < 3; k++) jmp[i][k] = dtfm * f[i][k];
+    mark(i);
+  });
+  forget_energies();
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::open(const AtomSet &set, bool fingerprint) const
+{
+  double **v = atom->v;
+  double **jmp = jump();
+  double *sig = fingerprint ? vsig() : nullptr;
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jmp[i][k];
+    if (sig) sig[i] = velocity_fingerprint(v[i]);
+  });
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::jump_atom(int i, double h, const double *favg, double *mag) const
+{
+  const double dtfm = 2.0 * h * force->ftm2v * inverse_mass_of(i);
+  double *v = atom->v[i];
+  double *jmp = jump()[i];
+  double vnew[3];
+  for (int k = 0; k < 3; k++) vnew[k] = jump_component(dtfm * favg[k], v[k], jmp[k]);
+  mag[0] = MAX(mag[0], vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
+  mag[1] = MAX(mag[1], jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::jump_loop(const AtomSet &set, double **favg, const Loop &step, double *mag) const
+{
+  double **x = atom->x;
+  double **v = atom->v;
+  double **jmp_all = jump();
+  double **fstart = step.fsample ? this->fstart() : nullptr;
+  double **fsample = step.fsample;
+  double *sig = step.fingerprint ? vsig() : nullptr;
+  const double *rmass = atom->rmass;
+  const double *minv = inverse_mass.data();
+  const int *type = atom->type;
+  const double kick = 2.0 * step.h * force->ftm2v;
+  const double rest = step.rest, ahead = step.ahead;
+  double vv = mag[0], jj = mag[1];
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
+    double vh[3] = {v[i][0], v[i][1], v[i][2]};
+    double jmp[3] = {jmp_all[i][0], jmp_all[i][1], jmp_all[i][2]};
+    double vnew[3];
+    for (int k = 0; k < 3; k++) {
+      double xk = x[i][k] + rest * vh[k];
+      vnew[k] = jump_component(dtfm * favg[i][k], vh[k], jmp[k]);
+      if (ahead >= 0.0) {
+        vh[k] += 0.5 * jmp[k];
+        xk += ahead * vh[k];
+      }
+      x[i][k] = xk;
+      v[i][k] = vh[k];
+      jmp_all[i][k] = jmp[k];
+      if (fstart) fstart[i][k] = fsample[i][k];
+    }
+    // (no fingerprint when a step begins ahead: nothing may change v then)
+    if (sig) sig[i] = velocity_fingerprint(v[i]);
+    vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
+    jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
+  });
+  mag[0] = vv;
+  mag[1] = jj;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::mark(int i) const
+{
+  vsig()[i] = velocity_fingerprint(atom->v[i]);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::mark_all(const AtomSet &set) const
+{
+  double **v = atom->v;
+  double *sig = vsig();
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    sig[i] = velocity_fingerprint(v[i]);
+  });
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool TwoStep::changed(int i) const
+{
+  return velocity_fingerprint(atom->v[i]) != vsig()[i];
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool TwoStep::any_changed(const AtomSet &set) const
+{
+  double **v = atom->v;
+  const double *sig = vsig();
+  bool any = false;
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    if (velocity_fingerprint(v[i]) != sig[i]) any = true;
+  });
+  return any;
+}
+
+/* ----------------------------------------------------------------------
+   a reversal of all velocities: the free-flight velocity -v^n + [v]^n/2 =
+   -v^{n-1/2} continues backwards in time with the same jump
+------------------------------------------------------------------------- */
+
+int TwoStep::velocity_change(const AtomSet &set, bool can_reverse)
+{
+  double **v = atom->v;
+  const double *sig = vsig();
+  int local[2] = {0, 0};    // some differ, some are not reversed
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    const double back[3] = {-v[i][0], -v[i][1], -v[i][2]};
+    if (velocity_fingerprint(v[i]) != sig[i]) local[0] = 1;
+    if (velocity_fingerprint(back) != sig[i]) local[1] = 1;
+  });
+  int global[2];
+  MPI_Allreduce(local, global, 2, MPI_INT, MPI_MAX, world);
+  if (!global[0]) return 0;
+  if (global[1] || !can_reverse) return 2;
+  mark_all(set);
+  forget_energies();
+  return 1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+const double *TwoStep::energies(const AtomSet &set)
+{
+  if (cached_step == update->ntimestep) return cached;
+
+  double **v = atom->v;
+  double **jmp = jump();
+  double local[2] = {0.0, 0.0};
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    const double m = atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
+    // with v^{n+1/2} = v^n + [v]^n/2: v^{n-1/2}.v^{n+1/2} = |v^n|^2 - |[v]^n|^2/4
+    for (int k = 0; k < 3; k++) {
+      local[0] += m * (v[i][k] * v[i][k] - 0.25 * jmp[i][k] * jmp[i][k]);
+      local[1] += m * jmp[i][k] * jmp[i][k];
+    }
+  });
+  MPI_Allreduce(local, cached, 2, MPI_DOUBLE, MPI_SUM, world);
+  cached[0] *= 0.5 * force->mvv2e;
+  cached[1] *= 0.125 * force->mvv2e;
+  cached_step = update->ntimestep;
+  return cached;
+}

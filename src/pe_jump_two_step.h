@@ -1,0 +1,114 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_TWO_STEP_H
+#define LMP_PE_JUMP_TWO_STEP_H
+
+#include "pe_jump_node_sampler.h"
+
+#include <functional>
+#include <vector>
+
+namespace LAMMPS_NS {
+namespace PEJump {
+  class AtomState;
+
+  // The two-step scheme of a set of atoms: its per-atom state (fields of
+  // the state table) and the updates of the velocities. Between its steps
+  // an atom's atom->v is its node velocity v^n; inside them, its
+  // free-flight velocity v^{n+1/2} = v^n + [v]^n/2. Fields: the jump [v]^n,
+  // stored as 2 (v^{n+1/2} - v^n) of the rounded values so that v^n +
+  // [v]^n/2 gives v^{n+1/2} back exactly; a fingerprint of the velocity the
+  // scheme left in atom->v (a velocity found different was changed by
+  // someone else); and (Lobatto rules) the sampled force at the start node.
+
+  class TwoStep : protected Pointers {
+   public:
+    TwoStep(class LAMMPS *, AtomState &, bool start_nodes);
+
+    double **jump() const;
+    double *vsig() const;
+    double **fstart() const;    // nullptr without start nodes
+
+    // refusals common to the fixes (run style, time step, torques), and
+    // 1/m per atom type as the jump loops take it
+    void init(const char *style);
+    double inverse_mass_of(int i) const;
+
+    // the ranks agree on started (restart data that does not fit, marked
+    // -1, is told); non-finite velocities are refused. Returns 0 or 1
+    int agree_on_started(int started, const AtomSet &, const char *style) const;
+
+    // [v]^0 = step(i) F/m: the initial kick (scale 1) or none (scale 0)
+    void start(const AtomSet &, double **f, double scale, const std::function<double(int)> &step);
+
+    // the steps of the atoms of set begin: v^n -> v^{n+1/2}
+    void open(const AtomSet &, bool fingerprint) const;
+
+    // one component of the update: with vh = v^{n+1/2} and jmp = [v]^n on
+    // entry and dfavg = 2 h <F>/m, vh becomes the node velocity v^{n+1} and
+    // jmp the jump [v]^{n+1}, stored as 2 (v^{n+3/2} - v^{n+1}) so that
+    // v^{n+1} + jmp/2 gives v^{n+3/2} back; returns v^{n+3/2}
+    static double jump_component(double dfavg, double &vh, double &jmp)
+    {
+      jmp = dfavg - jmp;
+      const double vnew = vh + jmp;
+      vh = vnew - 0.5 * jmp;
+      jmp = 2.0 * (vnew - vh);
+      return vnew;
+    }
+
+    // atom i (atom->v its v^{n+1/2}) jumps with the quadrature sum favg of
+    // its forces over a step h; mag: the largest |v^{n+3/2}|^2 and
+    // |[v]^{n+1}|^2 so far
+    void jump_atom(int i, double h, const double *favg, double *mag) const;
+
+    // the atoms of set jump with favg over the step h and move on by rest
+    // (from the primary node to the step end); fstart gets the start-node
+    // forces of the next step from fsample (if has start nodes and
+    // fsample); fingerprints if asked; with ahead >= 0 the next step
+    // begins and moves by ahead in the same pass, with the same operations
+    struct Loop {
+      double h, rest, ahead;
+      double **fsample;
+      bool fingerprint;
+    };
+    void jump_loop(const AtomSet &, double **favg, const Loop &, double *mag) const;
+
+    void mark(int i) const;    // the fingerprint of atom->v[i]
+    void mark_all(const AtomSet &) const;
+    bool changed(int i) const;                  // atom->v[i] is not the one the scheme left
+    bool any_changed(const AtomSet &) const;    // on this rank
+
+    // 0: the velocities are those the scheme left, 1: all were reversed
+    // (then taken as the scheme's), 2: changed otherwise (global)
+    int velocity_change(const AtomSet &, bool can_reverse);
+
+    // pseudo-kinetic energy (1/2) sum m v^{n-1/2}.v^{n+1/2} and jump energy
+    // (1/8) sum m |[v]^n|^2, computed once per time step (forget_energies()
+    // after the state changed within one)
+    const double *energies(const AtomSet &);
+    void forget_energies() { cached_step = -1; }
+
+   private:
+    AtomState &state;
+    int JUMP, VSIG, FSTART;
+    std::vector<double> inverse_mass;
+    bigint cached_step;
+    double cached[2];
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif
