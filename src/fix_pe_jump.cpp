@@ -42,6 +42,7 @@
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_step_control.h"
 #include "pe_jump_two_step.h"
+#include "pe_jump_work_forces.h"
 #include "timer.h"
 #include "update.h"
 
@@ -63,24 +64,21 @@ using PEJump::StepControl;
 
 /* ---------------------------------------------------------------------- */
 
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) : FixPEJump(lmp, narg, arg, 3, false) {}
-
-/* ---------------------------------------------------------------------- */
-
-FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool two_clocks) :
+FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), automatic(nullptr), sampler(nullptr), nodes(nullptr),
-    state(nullptr), steps(nullptr), guard(nullptr), others(nullptr), damping(nullptr),
-    fsum(nullptr), fsample(nullptr), nmax_work(0)
+    state(nullptr), scheme(nullptr), steps(nullptr), damping(nullptr), guard(nullptr),
+    others(nullptr), work(nullptr)
 {
-  if (narg < first_keyword) utils::missing_cmd_args(FLERR, std::string("fix ") + style, error);
+  if (narg < 3) utils::missing_cmd_args(FLERR, "fix pe_jump", error);
 
-  opts.parse(lmp, style, narg, arg, first_keyword, two_clocks);
+  opts.parse(lmp, style, narg, arg, 3, false);
 
   rule = new Quadrature(static_cast<Quadrature::Family>(opts.family), opts.npoints);
   sampler = new ForceSampler(lmp);
   nodes = new NodeSampler(lmp, sampler);
   guard = new StabilityGuard(lmp);
   others = new OtherFixes(lmp, this);
+  work = new PEJump::WorkForces(lmp, 2);
 
   if (opts.auto_tol > 0.0) {
     if (opts.sample_mask != ForceSampler::ALL)
@@ -110,21 +108,17 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg, int first_keyword, bool 
   force_reneighbor = 1;
   next_reneighbor = -1;
 
-  started = reinit_pending = opened_ahead = before_open = 0;
+  reinit_pending = opened_ahead = before_open = 0;
   eflag_step = vflag_step = 0;
   h_step = 0.0;
   evals_step = evals_total = 0.0;
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
-  fresh_atoms = 0;
+  scheme->fresh = 0;
   damping = new PEJump::ParasiticDamping();
   advance_pending = 0.0;
-  // a derived style registers its callbacks at the end of its own
-  // constructor, once all its arguments are accepted
-  if (!two_clocks) {
-    atom->add_callback(Atom::GROW);
-    atom->add_callback(Atom::RESTART);
-  }
+  atom->add_callback(Atom::GROW);
+  atom->add_callback(Atom::RESTART);
 }
 
 /* ----------------------------------------------------------------------
@@ -146,8 +140,7 @@ FixPEJump::~FixPEJump()
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
-  memory->destroy(fsum);
-  memory->destroy(fsample);
+  delete work;
   delete[] extlist;
   delete steps;
   delete scheme;
@@ -209,16 +202,6 @@ void FixPEJump::init()
 }
 
 /* ----------------------------------------------------------------------
-   atoms of another time integrator interact with this fix's atoms only if
-   every node of the rule is a step end (lobatto 2)
-------------------------------------------------------------------------- */
-
-static bool nodes_at_step_ends(const Quadrature &rule)
-{
-  return (rule.family() == Quadrature::LOBATTO) && (rule.size() == 2);
-}
-
-/* ----------------------------------------------------------------------
    forces at the current positions q^n are known here. Start the two-step
    scheme, or continue it if the state carried over (earlier run, restart)
 ------------------------------------------------------------------------- */
@@ -230,11 +213,11 @@ void FixPEJump::setup(int /*vflag*/)
   guard->start_run();
   opened_ahead = 0;
   evals_step = 0.0;
-  started = scheme->agree_on_started(started, group_atoms(), style);
-  if (!started) {
+  scheme->agree_on_started(group_atoms(), style);
+  if (!scheme->started) {
     start_scheme(nullptr, true);
   } else {
-    const int change = detect_velocity_change();
+    const int change = scheme->velocity_change(group_atoms(), true);
     if (change == 2)
       start_scheme("velocities were changed since the last run: restarting the two-step scheme "
                    "from the current positions and velocities",
@@ -245,8 +228,8 @@ void FixPEJump::setup(int /*vflag*/)
       utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
                      style);
   }
-  fresh_atoms = 0;
-  if (!nodes_at_step_ends(*rule)) others->refuse_interactions(rule->name().c_str());
+  scheme->fresh = 0;
+  if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pseudo_energy_now());
   if (automatic) automatic->start_run(*nodes, opts.sample_mask);
 }
@@ -287,7 +270,7 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   open_steps();
   if (steps->keeps_history()) {
     grow_work();
-    if (steps->compensate(h_step, group_atoms(), atom->v, scheme->jump(), fsum)) {
+    if (steps->compensate(h_step, group_atoms(), atom->v, scheme->jump(), fsum())) {
       scheme->forget_energies();
       guard->forget_stats();
     }
@@ -328,7 +311,7 @@ void FixPEJump::open_steps()
   double **fstart = scheme->fstart();
   const bool half_kick = split_primary() && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
-  for_atoms(nullptr, [&](int i) {
+  for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
     if (half_kick && !std::isnan(fstart[i][0])) {
       const double dtfm = dth * scheme->inverse_mass_of(i);
@@ -373,7 +356,7 @@ void FixPEJump::open_and_advance(double t)
   double **v = atom->v;
   double **jump = scheme->jump();
   const double now = advance_now(t);
-  for_atoms(nullptr, [&](int i) {
+  for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) {
       v[i][k] += 0.5 * jump[i][k];
       x[i][k] += now * v[i][k];
@@ -393,7 +376,7 @@ void FixPEJump::advance(double t)
   double **x = atom->x;
   double **v = atom->v;
   const double now = advance_now(t);
-  for_atoms(nullptr, [&](int i) {
+  for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) x[i][k] += now * v[i][k];
   });
 }
@@ -421,7 +404,7 @@ void FixPEJump::post_neighbor()
   if (advance_pending == 0.0) return;
   double **x = atom->x;
   double **v = atom->v;
-  for_atoms(nullptr, [&](int i) {
+  for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) x[i][k] += advance_pending * v[i][k];
   });
   advance_pending = 0.0;
@@ -478,9 +461,9 @@ bool FixPEJump::use_copy() const
 
 /* ---------------------------------------------------------------------- */
 
-AtomSet FixPEJump::group_atoms(const AtomList *only) const
+AtomSet FixPEJump::group_atoms() const
 {
-  return {groupbit, only};
+  return {groupbit, nullptr};
 }
 
 /* ----------------------------------------------------------------------
@@ -492,17 +475,8 @@ AtomSet FixPEJump::group_atoms(const AtomList *only) const
 void FixPEJump::check_lists()
 {
   const int first = rule->has_end_nodes() ? 1 : 0;
-  const double c_hi = tally_step() ? 1.0 : rule->node.back();
+  const double c_hi = nodes->tally_step() ? 1.0 : rule->node.back();
   check_excursion(rule->node[first] * h_step, c_hi * h_step);
-}
-
-/* ---------------------------------------------------------------------- */
-
-bool FixPEJump::tally_step() const
-{
-  const bigint now = update->ntimestep;
-  return (update->eflag_global == now) || (update->eflag_atom == now) ||
-      (update->vflag_global == now) || (update->vflag_atom == now);
 }
 
 /* ----------------------------------------------------------------------
@@ -517,7 +491,7 @@ void FixPEJump::pre_reverse(int eflag, int vflag)
   if (!use_copy()) return;
   grow_work();
   const int nall = atom->nlocal + atom->nghost;
-  if (nall) memcpy(&fsample[0][0], &atom->f[0][0], 3 * sizeof(double) * nall);
+  if (nall) memcpy(&fsample()[0][0], &atom->f[0][0], 3 * sizeof(double) * nall);
 }
 
 /* ----------------------------------------------------------------------
@@ -536,8 +510,8 @@ void FixPEJump::final_integrate()
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
   const bool direct = (rule->size() == 1) && !split_primary() && !steps->adapts();
-  if (!direct) quadrature_sum(nullptr);
-  double **favg = direct ? atom->f : fsum;
+  if (!direct) quadrature_sum();
+  double **favg = direct ? atom->f : fsum();
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   double mag[2] = {0.0, 0.0};
@@ -547,11 +521,11 @@ void FixPEJump::final_integrate()
                       {h_step, rest, rule->node[rule->primary()] * update->dt, nullptr, false},
                       mag);
   else
-    finish_step(nullptr, favg, rest, mag);
+    finish_step(favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
 
   if (rest != 0.0) tally_at_node();
-  if (others->integrate_others() && (neighbor->ago == 0) && !nodes_at_step_ends(*rule))
+  if (others->integrate_others() && (neighbor->ago == 0) && !rule->only_end_nodes())
     others->refuse_interactions(rule->name().c_str());
   evals_total += evals_step;
   scheme->forget_energies();
@@ -566,7 +540,7 @@ void FixPEJump::final_integrate()
    |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for the stability guard
 ------------------------------------------------------------------------- */
 
-void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, double *mag)
+void FixPEJump::finish_step(double **favg, double rest, double *mag)
 {
   double **x = atom->x;
   double **v = atom->v;
@@ -574,7 +548,7 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   double **jump = scheme->jump();
   const bool keep_start = rule->has_end_nodes();
   double **fstart = scheme->fstart();
-  double **fhist = only ? nullptr : steps->next_history();
+  double **fhist = steps->next_history();
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS);
   double *vsig = fingerprint ? scheme->vsig() : nullptr;
   const double kick = 2.0 * h_step * force->ftm2v;
@@ -587,8 +561,8 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
   const double beta = damping->beta(h_step);
   if (!centre_kick && !end_kick && (beta == 0.0) && !fhist) {
-    scheme->jump_loop(group_atoms(only), favg,
-                      {h_step, rest, -1.0, keep_start ? fsample : nullptr, fingerprint}, mag);
+    scheme->jump_loop(group_atoms(), favg,
+                      {h_step, rest, -1.0, keep_start ? fsample() : nullptr, fingerprint}, mag);
     return;
   }
   double vv = mag[0], jj = mag[1];
@@ -599,22 +573,22 @@ void FixPEJump::finish_step(const AtomList *only, double **favg, double rest, do
     double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
     double vnew[3];
     for (int k = 0; k < 3; k++) {
-      if (centre_kick) vh[k] += 0.5 * dtfm * (f[i][k] - fsample[i][k]);
+      if (centre_kick) vh[k] += 0.5 * dtfm * (f[i][k] - fsample()[i][k]);
       x[i][k] += rest * vh[k];
       if (beta > 0.0) jmp[k] *= 1.0 - beta;
-      if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample[i][k]);
+      if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample()[i][k]);
       vnew[k] =
           PEJump::TwoStep::jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
       v[i][k] = vh[k];
       jump[i][k] = jmp[k];
-      if (keep_start) fstart[i][k] = fsample[i][k];
+      if (keep_start) fstart[i][k] = fsample()[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
     vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
     jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
   };
-  for_atoms(only, one);
+  for_atoms(one);
   mag[0] = vv;
   mag[1] = jj;
 }
@@ -644,12 +618,7 @@ bool FixPEJump::may_open_ahead() const
 
 void FixPEJump::tally_at_node()
 {
-  if (eflag_step || vflag_step) {
-    sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
-    evals_step += 1.0;
-  } else if (others->step_observed()) {
-    comm->forward_comm();
-  }
+  evals_step += nodes->at_step_end(eflag_step, vflag_step, others->step_observed());
 }
 
 /* ----------------------------------------------------------------------
@@ -669,7 +638,7 @@ void FixPEJump::post_run()
 
 void FixPEJump::end_of_step()
 {
-  if (steps->adapts()) steps->choose_next(group_atoms(), fsum, scheme->jump());
+  if (steps->adapts()) steps->choose_next(group_atoms(), fsum(), scheme->jump());
 }
 
 /* ----------------------------------------------------------------------
@@ -695,8 +664,8 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 
   // the jump takes the forces that the rule integrates
   const double kick = (opts.init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
-  scheme->start(group_atoms(), split_primary() ? fsample : atom->f, kick, [&](int i) {
-    return kick_step(i);
+  scheme->start(group_atoms(), split_primary() ? fsample() : atom->f, kick, [&](int) {
+    return update->dt;
   });
 
   // fixes defined after this one act on the forces after its setup(): redo
@@ -704,16 +673,9 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 
   reinit_pending = with_start && (opts.init_style == PEJump::Options::KICK) && !split_primary() &&
       sampler->has_projections();
-  started = 1;
+  scheme->started = 1;
   steps->forget();
   guard->forget_stats();
-}
-
-/* ---------------------------------------------------------------------- */
-
-double FixPEJump::kick_step(int /*i*/) const
-{
-  return update->dt;
 }
 
 /* ----------------------------------------------------------------------
@@ -724,13 +686,13 @@ void FixPEJump::store_start_node()
 {
   primary_sampled_force();
   double **fstart = scheme->fstart();
-  for_atoms(nullptr, [&](int i) {
-    for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+  for_atoms([&](int i) {
+    for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
   });
 }
 
 /* ----------------------------------------------------------------------
-   sampled force-field force at the primary node into fsample (owned atoms)
+   sampled force-field force at the primary node into fsample() (owned atoms)
 ------------------------------------------------------------------------- */
 
 void FixPEJump::primary_sampled_force()
@@ -740,13 +702,13 @@ void FixPEJump::primary_sampled_force()
   if (!nlocal && !split_primary()) return;
 
   if (!split_primary()) {
-    memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
+    memcpy(&fsample()[0][0], &atom->f[0][0], nbytes);
   } else if (use_copy()) {
     if (force->newton) comm->reverse_comm(this);
   } else {
     NodeSampler::Keep keep(*nodes);
     sampler->compute(opts.sample_mask, 0, 0);
-    if (nlocal) memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
+    if (nlocal) memcpy(&fsample()[0][0], &atom->f[0][0], nbytes);
     evals_step += sampler->fraction(opts.sample_mask);
   }
   // at setup, fixes after this one have not yet acted on the forces
@@ -762,9 +724,9 @@ void FixPEJump::project_sampled()
 {
   NodeSampler::Keep keep(*nodes);
   const size_t nbytes = 3 * sizeof(double) * atom->nlocal;
-  if (nbytes) memcpy(&atom->f[0][0], &fsample[0][0], nbytes);
+  if (nbytes) memcpy(&atom->f[0][0], &fsample()[0][0], nbytes);
   sampler->project();
-  if (nbytes) memcpy(&fsample[0][0], &atom->f[0][0], nbytes);
+  if (nbytes) memcpy(&fsample()[0][0], &atom->f[0][0], nbytes);
 }
 
 /* ----------------------------------------------------------------------
@@ -776,13 +738,13 @@ void FixPEJump::project_sampled()
 void FixPEJump::refresh_start_nodes()
 {
   int any = 0;
-  MPI_Allreduce(&fresh_atoms, &any, 1, MPI_INT, MPI_MAX, world);
+  MPI_Allreduce(&scheme->fresh, &any, 1, MPI_INT, MPI_MAX, world);
   if (!any || !rule->has_end_nodes()) return;
 
   // the new atoms (start node still unknown) also get the initial kick
   AtomList fresh;
   double **fstart = scheme->fstart();
-  for_atoms(nullptr, [&](int i) {
+  for_atoms([&](int i) {
     if (std::isnan(fstart[i][0])) fresh.push_back(i);
   });
   store_start_node();
@@ -795,12 +757,12 @@ void FixPEJump::refresh_start_nodes()
 }
 
 /* ----------------------------------------------------------------------
-   fsum = sum_k w_k F_sampled(q_k) + (F(q_p) - F_sampled(q_p)) over the nodes
+   fsum() = sum_k w_k F_sampled(q_k) + (F(q_p) - F_sampled(q_p)) over the nodes
    q_k = q^n + c_k h v^{n+1/2}; the primary node p was evaluated by the Verlet
    loop, a Lobatto start node is the previous step's end node
 ------------------------------------------------------------------------- */
 
-void FixPEJump::quadrature_sum(const AtomList *only)
+void FixPEJump::quadrature_sum()
 {
   if (automatic) {
     auto_quadrature_sum();
@@ -814,13 +776,13 @@ void FixPEJump::quadrature_sum(const AtomList *only)
 
   if (split_primary() || reuse_start) primary_sampled_force();
 
-  double **fp = split_primary() ? fsample : atom->f;
-  for_atoms(only, [&](int i) {
+  double **fp = split_primary() ? fsample() : atom->f;
+  for_atoms([&](int i) {
     if (reuse_start && std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
     for (int k = 0; k < 3; k++) {
-      fsum[i][k] = wp * fp[i][k];
-      if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
+      fsum()[i][k] = wp * fp[i][k];
+      if (reuse_start) fsum()[i][k] += rule->weight[0] * fstart[i][k];
     }
   });
 
@@ -828,14 +790,14 @@ void FixPEJump::quadrature_sum(const AtomList *only)
   if (rule->size() - first <= 1) return;
   // with a Lobatto rule the total force at the primary node (the step end)
   // is needed afterwards only for the impulses of forces outside the rule,
-  // or if something looks at it (it is then fsample again)
-  const bool keep_forces = split_primary() || only || !reuse_start;
+  // or if something looks at it (it is then fsample() again)
+  const bool keep_forces = split_primary() || !reuse_start;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
-                       group_atoms(only), opts.sample_mask, fsum, nullptr, keep_forces);
-  evals_step += evaluated * node_cost();
-  if (!keep_forces && atom->nlocal && (others->step_observed() || tally_step()))
-    memcpy(&atom->f[0][0], &fsample[0][0], 3 * sizeof(double) * atom->nlocal);
+                       group_atoms(), opts.sample_mask, fsum(), nullptr, keep_forces);
+  evals_step += evaluated * sampler->fraction(opts.sample_mask);
+  if (!keep_forces && atom->nlocal && (others->step_observed() || nodes->tally_step()))
+    memcpy(&atom->f[0][0], &fsample()[0][0], 3 * sizeof(double) * atom->nlocal);
 }
 
 /* ----------------------------------------------------------------------
@@ -847,21 +809,14 @@ void FixPEJump::quadrature_sum(const AtomList *only)
 void FixPEJump::auto_quadrature_sum()
 {
   double **fstart = scheme->fstart();
-  primary_sampled_force();    // F(q^{n+1}) into fsample
-  for_atoms(nullptr, [&](int i) {
+  primary_sampled_force();    // F(q^{n+1}) into fsample()
+  for_atoms([&](int i) {
     if (std::isnan(fstart[i][0]))
-      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
+      for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
   });
   const int evaluated = automatic->sum(*nodes, opts.sample_mask, group_atoms(), free_flight(),
-                                       h_step, fstart, fsample, fsum);
-  evals_step += evaluated * node_cost();
-}
-
-/* ---------------------------------------------------------------------- */
-
-double FixPEJump::node_cost()
-{
-  return sampler->fraction(opts.sample_mask);
+                                       h_step, fstart, fsample(), fsum());
+  evals_step += evaluated * sampler->fraction(opts.sample_mask);
 }
 
 /* ----------------------------------------------------------------------
@@ -912,39 +867,17 @@ void FixPEJump::check_excursion(double lo, double hi)
 
 void FixPEJump::finish_check(const double *local)
 {
-  double values[StabilityGuard::NMEASURES + 1], global[StabilityGuard::NMEASURES + 1];
-  for (int k = 0; k < StabilityGuard::NMEASURES; k++) values[k] = local[k];
-  values[StabilityGuard::NMEASURES] = damping->take_impulse();
-  MPI_Allreduce(values, global, StabilityGuard::NMEASURES + 1, MPI_DOUBLE, MPI_MAX, world);
-  damping->impulse_anywhere(global[StabilityGuard::NMEASURES] > 0.0);
-
-  switch (guard->judge(global)) {
-    case StabilityGuard::UNSTABLE:
-      error->all(FLERR,
-                 "Fix {} is unstable at step {}: the momentum jumps grew {:.3g}-fold since the "
-                 "start of the run (jump energy {:.8g}). {}",
-                 style, update->ntimestep, guard->growth(), scheme->energies(group_atoms())[1],
-                 instability_advice());
-      break;
-    case StabilityGuard::TOO_FAR:
-      error->all(FLERR,
-                 "Fix {}: atoms move more than half the neighbor skin ({}) between the force "
-                 "evaluations of step {}: reduce the time step (or K) or increase the skin",
-                 style, neighbor->skin, update->ntimestep);
-      break;
-    case StabilityGuard::REBUILD:
-      next_reneighbor = update->ntimestep;
-      break;
-    case StabilityGuard::FINE:
-      break;
-  }
-}
-
-/* ---------------------------------------------------------------------- */
-
-bool FixPEJump::can_reverse() const
-{
-  return true;
+  double impulse = damping->take_impulse();
+  const bool rebuild = guard->conclude(
+      style, local, impulse,
+      [&]() {
+        return scheme->energies(group_atoms())[1];
+      },
+      [&]() {
+        return instability_advice();
+      });
+  damping->impulse_anywhere(impulse > 0.0);
+  if (rebuild) next_reneighbor = update->ntimestep;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -960,39 +893,18 @@ std::string FixPEJump::instability_advice() const
 }
 
 /* ----------------------------------------------------------------------
-   0: velocities are those this fix left, 1: all of them were reversed
-   (the free-flight velocity -v^n + [v]^n/2 = -v^{n-1/2} then continues
-   backwards in time with the same jump), 2: changed otherwise
-------------------------------------------------------------------------- */
-
-int FixPEJump::detect_velocity_change()
-{
-  return scheme->velocity_change(group_atoms(), can_reverse());
-}
-
-/* ----------------------------------------------------------------------
    pseudo-energy V(q^n) + pseudo-kinetic energy at the current positions;
    evaluates the energy once (used at setup for the adapt normalisation)
 ------------------------------------------------------------------------- */
 
 double FixPEJump::pseudo_energy_now()
 {
-  double pe = potential_now(ForceSampler::ALL);
+  double pe = nodes->potential(ForceSampler::ALL);
   if (force->pair && force->pair->tail_flag) {
     const double volume = domain->xprd * domain->yprd * domain->zprd;
     pe += force->pair->etail / volume;
   }
   return pe + scheme->energies(group_atoms())[0];
-}
-
-/* ----------------------------------------------------------------------
-   potential energy of the contributions in mask at the current positions
-   (one evaluation; the forces are left as they were)
-------------------------------------------------------------------------- */
-
-double FixPEJump::potential_now(int mask)
-{
-  return nodes->potential(mask);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1021,21 +933,30 @@ double FixPEJump::compute_vector(int n)
 }
 
 /* ----------------------------------------------------------------------
-   work arrays for the owned atoms (fsample also for the ghosts if it is
+   work arrays for the owned atoms (fsample() also for the ghosts if it is
    split off before the reverse communication), only those the rule needs
 ------------------------------------------------------------------------- */
 
 void FixPEJump::grow_work()
 {
   const int need = use_copy() ? atom->nlocal + atom->nghost : atom->nlocal;
-  if (need <= nmax_work) return;
-  nmax_work = need + need / 16 + 64;
   const bool sum = (rule->size() > 1) || split_primary() || steps->keeps_history() || automatic;
   const bool sample = split_primary() || rule->has_end_nodes() || automatic;
-  memory->destroy(fsum);
-  memory->destroy(fsample);
-  if (sum) memory->create(fsum, nmax_work, 3, "pe_jump:fsum");
-  if (sample) memory->create(fsample, nmax_work, 3, "pe_jump:fsample");
+  work->ensure(need, (sum ? 1 << SUM : 0) | (sample ? 1 << SAMPLE : 0));
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **FixPEJump::fsum() const
+{
+  return work->get(SUM);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **FixPEJump::fsample() const
+{
+  return work->get(SAMPLE);
 }
 
 /* ----------------------------------------------------------------------
@@ -1064,7 +985,7 @@ void FixPEJump::set_arrays(int i)
 {
   state->reset(i);
   scheme->mark(i);
-  fresh_atoms = 1;
+  scheme->fresh = 1;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1100,7 +1021,7 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  list[0] = (started > 0) ? 1 : 0;
+  list[0] = (scheme->started > 0) ? 1 : 0;
   list[1] = rule->family();
   list[2] = rule->points();
   list[3] = evals_total;
@@ -1114,7 +1035,7 @@ void FixPEJump::restart(char *buf)
   auto *list = reinterpret_cast<double *>(buf);
   const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
       (static_cast<int>(list[2]) == rule->points());
-  started = (static_cast<int>(list[0]) != 0) && same_rule;
+  scheme->started = (static_cast<int>(list[0]) != 0) && same_rule;
   evals_total = list[3];
   steps->load(&list[4]);
   if (!same_rule && (comm->me == 0))
@@ -1130,37 +1051,29 @@ int FixPEJump::pack_restart(int i, double *buf)
 {
   // written during a run: the velocities are the fix's own
   if (update->whichflag) scheme->mark(i);
-  buf[0] = state->values() + 1;
-  state->pack(i, &buf[1]);
-  return state->values() + 1;
+  return state->pack_restart(i, buf);
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJump::unpack_restart(int nlocal, int nth)
 {
-  double **extra = atom->extra;
-  int m = 0;
-  for (int i = 0; i < nth; i++) m += static_cast<int>(extra[nlocal][m]);
-  if (static_cast<int>(extra[nlocal][m]) != state->values() + 1) {
-    started = -1;    // agree_on_started() says so
-    return;
-  }
-  state->unpack(nlocal, &extra[nlocal][m + 1]);
+  // a misfit is told by TwoStep::agree_on_started()
+  if (!state->unpack_restart(nlocal, nth)) scheme->started = -1;
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJump::size_restart(int /*nlocal*/)
 {
-  return state->values() + 1;
+  return state->restart_size();
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJump::maxsize_restart()
 {
-  return state->values() + 1;
+  return state->restart_size();
 }
 
 /* ----------------------------------------------------------------------
@@ -1172,9 +1085,9 @@ int FixPEJump::pack_reverse_comm(int n, int first, double *buf)
 {
   int m = 0;
   for (int i = first; i < first + n; i++) {
-    buf[m++] = fsample[i][0];
-    buf[m++] = fsample[i][1];
-    buf[m++] = fsample[i][2];
+    buf[m++] = fsample()[i][0];
+    buf[m++] = fsample()[i][1];
+    buf[m++] = fsample()[i][2];
   }
   return m;
 }
@@ -1186,9 +1099,9 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
   int m = 0;
   for (int i = 0; i < n; i++) {
     const int j = list[i];
-    fsample[j][0] += buf[m++];
-    fsample[j][1] += buf[m++];
-    fsample[j][2] += buf[m++];
+    fsample()[j][0] += buf[m++];
+    fsample()[j][1] += buf[m++];
+    fsample()[j][2] += buf[m++];
   }
 }
 
@@ -1196,8 +1109,6 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
 
 double FixPEJump::memory_usage()
 {
-  const int arrays = (fsum ? 1 : 0) + (fsample ? 1 : 0);
   return state->memory_usage() + nodes->memory_usage() +
-      (automatic ? automatic->memory_usage() : 0.0) +
-      static_cast<double>(nmax_work) * 3 * sizeof(double) * arrays;
+      (automatic ? automatic->memory_usage() : 0.0) + work->memory_usage();
 }

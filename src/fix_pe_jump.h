@@ -38,6 +38,7 @@ namespace PEJump {
   class StabilityGuard;
   class StepControl;
   class TwoStep;
+  class WorkForces;
 }    // namespace PEJump
 
 class FixPEJump : public Fix {
@@ -75,98 +76,84 @@ class FixPEJump : public Fix {
   void unpack_reverse_comm(int, int *, double *) override;
   double memory_usage() override;
 
- protected:
+ private:
   using AtomList = PEJump::AtomList;
 
-  // for derived styles: keywords are parsed from arg[first_keyword] on;
-  // the slow/fast style has fixed steps (compensate is off by default) and
-  // takes the buffer keyword
-  FixPEJump(class LAMMPS *, int, char **, int first_keyword, bool two_clocks);
-
-  // the parts: quadrature rule (or the nested rules of quadrature auto),
-  // force evaluation, node sampling, per-atom state, step control, the
-  // stability guard, and what other fixes do
+  // the parts: the keywords, quadrature rule (or the nested rules of
+  // quadrature auto), force evaluation, node sampling, per-atom state, the
+  // scheme's updates, step control and damping, the stability guard, what
+  // other fixes do, and the work arrays
+  PEJump::Options opts;
   PEJump::Quadrature *rule;
   PEJump::AutoQuadrature *automatic;    // quadrature auto, or nullptr
   PEJump::ForceSampler *sampler;
   PEJump::NodeSampler *nodes;
   PEJump::AtomState *state;
+  PEJump::TwoStep *scheme;
   PEJump::StepControl *steps;
+  PEJump::ParasiticDamping *damping;
   PEJump::StabilityGuard *guard;
   PEJump::OtherFixes *others;
+  PEJump::WorkForces *work;    // SUM: the quadrature sum, SAMPLE: the sampled primary force
 
-  PEJump::TwoStep *scheme;    // the per-atom state and updates of the two-step scheme
-
-  PEJump::Options opts;    // the keywords
-  PEJump::ParasiticDamping *damping;
-
-  // per-step work arrays (not migrated), only those the rule needs
-  double **fsum;       // quadrature sum of the forces over the step
-  double **fsample;    // sampled force at the primary node (when split)
-  int nmax_work;
-
-  int started;               // 1 once the two-step state is valid (-1: restart data misfit)
   int reinit_pending;        // redo the initial kick when all fix forces are in
   int opened_ahead;          // the last step began this one already
   int before_open;           // atom->v holds v^n while this step's nodes are checked
-  int fresh_atoms;           // 1 if atoms were created since the last setup (this rank)
   double advance_pending;    // free flight left for after this step's list build
   int eflag_step, vflag_step;
-  double h_step;    // step size used in the current step
-
+  double h_step;                     // step size used in the current step
   double evals_step, evals_total;    // force evaluations (units of full ones)
 
-  PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
+  enum { SUM, SAMPLE };
+  double **fsum() const;
+  double **fsample() const;
+  void grow_work();
+
+  PEJump::AtomSet group_atoms() const;
   // forces not integrated by the rule (other fixes that add forces,
   // contributions left out by sample) act as impulses at the primary node,
   // where the sampled part is split off: by copying f before the reverse
   // communication if all contributions are sampled, else by a sampling
   bool split_primary() const;
   bool use_copy() const;
-  virtual void start_scheme(const char *, bool);
-  virtual void node_impulses();
-  virtual void open_steps();                 // v^n -> v^{n+1/2} of the atoms whose step begins
-  virtual bool open_while_moving() const;    // open_steps() and advance() may be one pass
+  void start_scheme(const char *, bool);
+  void node_impulses();
+  void open_steps();                 // v^n -> v^{n+1/2}
+  bool open_while_moving() const;    // open_steps() and advance() may be one pass
   void open_and_advance(double t);
+  void advance(double t);          // free flight to the primary node
   double advance_now(double t);    // free flight now (t, or to the step end)
   bool watch(int when) const;      // other fixes may change velocities then (OtherFixes hooks)
-  virtual PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
+  PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
+  void store_start_node();                   // Lobatto start-node forces at q^0
   void refresh_start_nodes();
   void primary_sampled_force();
   void project_sampled();
-  void quadrature_sum(const AtomList *only);    // only: the atoms that move to the nodes
+  void quadrature_sum();
   void auto_quadrature_sum();
+  void check_lists();    // neighbor lists valid for this step's nodes
   void check_excursion(double lo, double hi);
   void finish_check(const double *local);
+  std::string instability_advice() const;
   void tally_at_node();
   bool rebuild_due() const;
-  bool tally_step() const;
-  void grow_work();
-  int detect_velocity_change();
   double pseudo_energy_now();
-  double potential_now(int mask);
   void global_state(double *) const;
 
-  // apply one(i) to the owned atoms of the group, or to those listed in only
-  template <typename Function> void for_atoms(const AtomList *only, Function &&one) const
+  // apply one(i) to the owned atoms of the group
+  template <typename Function> void for_atoms(Function &&one) const
   {
-    group_atoms(only).each(atom_mask(), owned_atoms(), one);
+    group_atoms().each(atom_mask(), owned_atoms(), one);
   }
   const int *atom_mask() const;    // atom->mask, atom->nlocal (the header
   int owned_atoms() const;         // needs no definition of class Atom)
 
-  void finish_step(const AtomList *only, double **favg, double rest, double *mag);
+  // the atoms of the group jump with the quadrature sums favg of their
+  // forces over the step and move on by rest from the primary node to
+  // q^{n+1}; mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
+  void finish_step(double **favg, double rest, double *mag);
   bool may_open_ahead() const;
-
-  // hooks for derived styles
-  virtual double kick_step(int) const;               // step size of the initial kick of an atom
-  virtual void advance(double);                      // free flight to the primary node
-  virtual void store_start_node();                   // Lobatto start-node forces at q^0
-  virtual double node_cost();                        // evaluations a sampled node costs
-  virtual void check_lists();                        // neighbor lists valid for this step's nodes
-  virtual std::string instability_advice() const;    // what to do when unstable
-  virtual bool can_reverse() const;                  // a velocity reversal can be continued
-  static constexpr int NGLOBAL = 6;                  // values of the global restart state
+  static constexpr int NGLOBAL = 6;    // values of the global restart state
 };
 
 }    // namespace LAMMPS_NS

@@ -33,21 +33,21 @@
 #include "error.h"
 #include "force.h"
 #include "group.h"
-#include "memory.h"
 #include "modify.h"
 #include "neighbor.h"
 #include "output.h"
 #include "pair.h"
 #include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
+#include "pe_jump_clock_assignment.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_interaction_split.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_other_fixes.h"
 #include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
-#include "pe_jump_step_control.h"
 #include "pe_jump_two_step.h"
+#include "pe_jump_work_forces.h"
 #include "update.h"
 
 #include <cmath>
@@ -57,36 +57,36 @@ using namespace LAMMPS_NS;
 using namespace FixConst;
 using PEJump::AsyncClocks;
 using PEJump::AtomState;
+using PEJump::ClockAssignment;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
 using PEJump::NodeSampler;
 using PEJump::OtherFixes;
+using PEJump::Quadrature;
 using PEJump::StabilityGuard;
-
-static constexpr int NASYNC_GLOBAL = 6;    // K, fine step index, elapsed time, buffer, clock
 
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
-    FixPEJump(lmp, narg, arg, 5, true), finebit(0), clockbit(0), reverse_flags(nullptr),
-    split_calls(-1), topology_at_setup(0), changes_seen(0), saved_buffer(-1), split(nullptr),
-    clocks(nullptr), fcoarse(nullptr), nmax_coarse(0)
+    Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
+    scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
+    assign(nullptr), work(nullptr), reinit_pending(0), eflag_step(0), vflag_step(0), h_step(0.0),
+    evals_step(0.0), evals_total(0.0), stats_slow{0.0, 0.0}, split_calls(-1), topology_at_setup(0),
+    changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
+  opts.parse(lmp, style, narg, arg, 5, true);
   const int nfine = utils::inumeric(FLERR, arg[3], false, lmp);
   if (nfine < 1) error->all(FLERR, "Fix pe_jump/async needs K >= 1 fine steps per coarse step");
-  const int ifast = group->find(arg[4]);
-  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
-  finebit = group->bitmask[ifast];
-  fast_group = arg[4];
-
-  if (steps->adapts())
+  if (group->find(arg[4]) < 0)
+    error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
+  if (opts.adapt_eps > 0.0)
     error->all(FLERR,
                "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
                "steps are fixed (use fix pe_jump for adaptive steps)");
-  if (automatic)
+  if (opts.auto_tol > 0.0)
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
-  if (steps->keeps_history())
+  if (opts.compensate > 0)
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
   if (opts.damp_time >= 0.0)
     error->all(FLERR, "Fix pe_jump/async does not support the damp keyword yet");
@@ -94,24 +94,39 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     error->all(FLERR,
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 
-  counts[0] = counts[1] = counts[2] = 0.0;
-  saved_clock[0] = saved_clock[1] = -1.0;
-  stats_slow[0] = stats_slow[1] = 0.0;
-  clockbit = finebit;    // with buffer layers: see post_constructor()
-  comm_forward = 1;
-  split = new InteractionSplit(lmp, groupbit, clockbit);
+  rule = new Quadrature(static_cast<Quadrature::Family>(opts.family), opts.npoints);
+  sampler = new ForceSampler(lmp);
+  nodes = new NodeSampler(lmp, sampler);
+  guard = new StabilityGuard(lmp);
+  others = new OtherFixes(lmp, this);
+  work = new PEJump::WorkForces(lmp, 3);
+  state = new AtomState(lmp);
+  scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
+  FACC = state->add("facc", 3, 0.0);
+  FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
+  assign = new ClockAssignment(lmp, this, arg[4], opts.buffer_layers, *state);
+  clocks = new AsyncClocks(lmp, *state, nfine);
+  split = new InteractionSplit(lmp, groupbit, assign->clock_bit());
 
+  time_integrate = 1;
+  scalar_flag = 1;
+  vector_flag = 1;
   size_vector = 9;
-  delete[] extlist;
+  global_freq = 1;
+  extscalar = 1;
+  extvector = -1;
   extlist = new int[size_vector]{1, 1, 0, 0, 0, 0, 0, 0, 0};
   peratom_flag = 1;
   size_peratom_cols = 0;
   peratom_freq = 1;
+  restart_global = 1;
+  restart_peratom = 1;
+  create_attribute = 1;
+  comm_forward = 1;
+  comm_reverse = 1;
+  force_reneighbor = 1;
+  next_reneighbor = -1;
 
-  FACC = state->add("facc", 3, 0.0);
-  FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
-  KLASS = state->add("klass", 1, OUTSIDE);
-  clocks = new AsyncClocks(lmp, *state, nfine);
   for (int i = 0; i < atom->nlocal; i++) FixPEJumpAsync::set_arrays(i);
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -124,36 +139,49 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
 
 void FixPEJumpAsync::post_constructor()
 {
-  FixPEJump::post_constructor();
-  if (opts.buffer_layers > 0) group->find_or_create((std::string(id) + "_fine_clock").c_str());
+  assign->create_clock_group();
 }
 
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::~FixPEJumpAsync()
 {
-  delete clocks;
+  if (modify->get_fix_by_id(id)) {
+    atom->delete_callback(id, Atom::GROW);
+    atom->delete_callback(id, Atom::RESTART);
+  }
+  delete[] extlist;
   delete split;
-  memory->destroy(fcoarse);
+  delete clocks;
+  delete assign;
+  delete scheme;
+  delete state;
+  delete work;
+  delete others;
+  delete guard;
+  delete nodes;
+  delete sampler;
+  delete rule;
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJumpAsync::setmask()
 {
-  return FixPEJump::setmask() | POST_NEIGHBOR | PRE_FORCE;
+  return INITIAL_INTEGRATE | POST_NEIGHBOR | PRE_FORCE | PRE_REVERSE | FINAL_INTEGRATE;
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::init()
 {
-  FixPEJump::init();
+  scheme->init(style);
+  others->sort(*sampler);
   refuse_unsplittable();
   refuse_other_fixes();
   topology_at_setup = topology_count();
-  find_groups();
-  split->set_fine_bit(clockbit);
+  assign->find_groups();
+  split->set_fine_bit(assign->clock_bit());
   maxexchange = state->values();
 }
 
@@ -217,88 +245,11 @@ void FixPEJumpAsync::refuse_other_fixes() const
                  ifix->id, ifix->style);
 }
 
-/* ----------------------------------------------------------------------
-   the fast group (and the fine-clock group of the buffer), looked up again
-   at every init: a deleted group's bit may have gone to another group
-   since. The fast group must be a non-empty part of the fix group.
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::find_groups()
-{
-  const int ifast = group->find(fast_group);
-  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted", fast_group);
-  finebit = group->bitmask[ifast];
-  clockbit = finebit;
-  if (opts.buffer_layers > 0) {
-    const std::string clock_group = std::string(id) + "_fine_clock";
-    const int iclock = group->find(clock_group);
-    if (iclock < 0)
-      error->all(FLERR, "Fix pe_jump/async: its fine-clock group {} was deleted", clock_group);
-    clockbit = group->bitmask[iclock];
-  }
-
-  const int *mask = atom->mask;
-  bigint local[2] = {0, 0};    // fast atoms in the fix group, fast atoms outside it
-  for (int i = 0; i < atom->nlocal; i++) {
-    if (!(mask[i] & finebit)) continue;
-    if (mask[i] & groupbit)
-      ++local[0];
-    else
-      ++local[1];
-  }
-  bigint global[2];
-  MPI_Allreduce(local, global, 2, MPI_LMP_BIGINT, MPI_SUM, world);
-  if (global[1] > 0)
-    error->all(FLERR, "Fix pe_jump/async: {} atoms of the fast group are not in the fix group {}",
-               global[1], group->names[igroup]);
-  if (global[0] == 0)
-    error->all(FLERR, "Fix pe_jump/async: the fast group has no atoms in the fix group");
-}
-
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::setup_post_neighbor()
 {
   post_neighbor();
-}
-
-/* ----------------------------------------------------------------------
-   buffer keyword, when the scheme starts: the fine clock takes the fast
-   group and, layer by layer, the atoms of the fix group that share an
-   interaction (a bonded one, or a pair of the neighbor lists) with an atom
-   on the fine clock. The slow partners of the interface then move on the
-   fine clock with it, which keeps the period-2 mode of the slow interface
-   atoms out of resonance with the fast region.
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::assign_buffer()
-{
-  int *mask = atom->mask;
-  const int nall = atom->nlocal + atom->nghost;
-  for (int i = 0; i < nall; i++) {
-    if (mask[i] & finebit)
-      mask[i] |= clockbit;
-    else
-      mask[i] &= ~clockbit;
-  }
-  // each layer adds the slow partners of the fine clock; stop early when a
-  // layer adds no atom (everything reachable is on the fine clock)
-  for (int layer = 0; layer < opts.buffer_layers; layer++) {
-    split->build();
-    split->mark_fine_participants(participant);
-    gather_flags(participant);
-    int added = 0;
-    for (int i = 0; i < atom->nlocal; i++)
-      if (participant[i] && (mask[i] & groupbit) && !(mask[i] & clockbit)) {
-        mask[i] |= clockbit;
-        added = 1;
-      }
-    comm->forward_comm(this);
-    int any = 0;
-    MPI_Allreduce(&added, &any, 1, MPI_INT, MPI_MAX, world);
-    if (!any) break;
-  }
-  split_calls = -1;    // split the lists again for the new clocks
 }
 
 /* ----------------------------------------------------------------------
@@ -313,7 +264,7 @@ void FixPEJumpAsync::node_impulses()
 {
   if (!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) return;
   if (watch(OtherFixes::BETWEEN_STEPS))
-    note_velocity_changes(clocks->at_coarse_node() ? nullptr : &fast_atoms);
+    note_velocity_changes(clocks->at_coarse_node() ? nullptr : &assign->fast_atoms);
   if (!clocks->at_coarse_node()) return;
   int any = 0;
   MPI_Allreduce(&changes_seen, &any, 1, MPI_INT, MPI_MAX, world);
@@ -329,11 +280,7 @@ void FixPEJumpAsync::node_impulses()
 
 void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
 {
-  double **v = atom->v;
-  const double *vsig = scheme->vsig();
-  for_atoms(only, [&](int i) {
-    if (PEJump::velocity_fingerprint(v[i]) != vsig[i]) changes_seen = 1;
-  });
+  if (scheme->any_changed(group_atoms(only))) changes_seen = 1;
 }
 
 /* ----------------------------------------------------------------------
@@ -346,7 +293,7 @@ void FixPEJumpAsync::open_steps()
   double **v = atom->v;
   double **jump = scheme->jump();
   double *vsig = watch(OtherFixes::INSIDE_STEP) ? scheme->vsig() : nullptr;
-  for (const int i : fast_atoms) {
+  for (const int i : assign->fast_atoms) {
     for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
   }
@@ -359,16 +306,7 @@ void FixPEJumpAsync::open_steps()
 
 PEJump::FreeFlight FixPEJumpAsync::free_flight() const
 {
-  return {atom->v, scheme->jump(), slow.data()};
-}
-
-/* ----------------------------------------------------------------------
-   the steps that begin are those of the atoms on the fine clock only
-------------------------------------------------------------------------- */
-
-bool FixPEJumpAsync::open_while_moving() const
-{
-  return false;
+  return {atom->v, scheme->jump(), assign->slow()};
 }
 
 /* ----------------------------------------------------------------------
@@ -398,46 +336,9 @@ void FixPEJumpAsync::post_neighbor()
                topology_at_setup, topology_count());
   split->build();
   split_calls = neighbor->ncalls;
-  find_slow();    // atoms are reordered only when the lists are rebuilt
-  find_moving();
-}
-
-/* ----------------------------------------------------------------------
-   atoms that move on fine steps: those on the fine clock and the slow ones
-   that take part in a fine interaction, here or as a ghost elsewhere. A
-   slow atom that joins a fine interaction inside a coarse step catches up
-   with its free flight first (and the ghosts are updated).
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::find_moving()
-{
-  split->mark_fine_participants(participant);
-  gather_flags(participant);
-
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  moving.resize(nlocal);
-  moving_atoms.clear();
-  fast_atoms.clear();
-  slow_moving.clear();
-  int caught = 0;
-  for (int i = 0; i < nlocal; i++) {
-    moving[i] = !slow[i] || participant[i];
-    if (!(mask[i] & groupbit)) continue;
-    if (moving[i]) {
-      moving_atoms.push_back(i);
-      (slow[i] ? slow_moving : fast_atoms).push_back(i);
-      if (clocks->times()[i] != AsyncClocks::MOVING) {
-        clocks->catch_up(i, free_flight(), true);
-        caught = 1;
-      }
-    } else {
-      clocks->hold(i);    // stays here until it is needed
-    }
-  }
-  int any = 0;
-  MPI_Allreduce(&caught, &any, 1, MPI_INT, MPI_MAX, world);
-  if (any) comm->forward_comm();
+  // atoms are reordered only when the lists are rebuilt
+  assign->find_slow(*split);
+  if (assign->find_moving(*split, *clocks, free_flight())) comm->forward_comm();
 }
 
 /* ----------------------------------------------------------------------
@@ -450,7 +351,7 @@ void FixPEJumpAsync::slow_magnitudes()
   stats_slow[0] = stats_slow[1] = 0.0;
   double **v = atom->v;
   double **jump = scheme->jump();
-  for (const int i : slow_atoms) {
+  for (const int i : assign->slow_atoms) {
     double vv = 0.0, jj = 0.0;
     for (int k = 0; k < 3; k++) {
       const double vhalf = v[i][k] + 0.5 * jump[i][k];
@@ -464,11 +365,9 @@ void FixPEJumpAsync::slow_magnitudes()
 
 /* ---------------------------------------------------------------------- */
 
-/* ---------------------------------------------------------------------- */
-
 void FixPEJumpAsync::catch_up_all()
 {
-  clocks->catch_up_all(free_flight(), moving.data());
+  clocks->catch_up_all(free_flight(), assign->moving());
 }
 
 /* ----------------------------------------------------------------------
@@ -483,7 +382,7 @@ void FixPEJumpAsync::advance(double t)
   const PEJump::FreeFlight vhalf = free_flight();
   clocks->moving_at(t);
   if (!clocks->last_fine_step()) {
-    for (const int i : moving_atoms)
+    for (const int i : assign->moving_atoms)
       for (int k = 0; k < 3; k++) x[i][k] += t * vhalf(i, k);
     return;
   }
@@ -500,14 +399,13 @@ void FixPEJumpAsync::advance(double t)
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJumpAsync::setup(int vflag)
+void FixPEJumpAsync::setup(int /*vflag*/)
 {
-  started = scheme->agree_on_started(started, group_atoms(), style);
+  scheme->agree_on_started(group_atoms(), style);
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
-  if ((opts.buffer_layers > 0) && (!started || (opts.buffer_layers != saved_buffer)))
-    assign_buffer();
+  if (assign->assign_buffer(scheme->started, *split)) split_calls = -1;
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
@@ -518,18 +416,69 @@ void FixPEJumpAsync::setup(int vflag)
                force->pair_style);
   // start nodes of slow atoms inside a coarse step cannot be taken again:
   // new atoms take theirs at their first evaluation
-  fresh_atoms = 0;
+  scheme->fresh = 0;
   changes_seen = 0;
   check_clocks();
-  FixPEJump::setup(vflag);
-  saved_buffer = opts.buffer_layers;
+
+  grow_work();
+  guard->start_run();
+  evals_step = 0.0;
+  if (!scheme->started)
+    start_scheme(nullptr, true);
+  else
+    continue_scheme();
+  if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
-  label_classes();
+  assign->label(*split);
 }
 
 /* ----------------------------------------------------------------------
-   a new start of the two-step scheme also starts a new coarse step
+   the state carried over (earlier run, restart): velocities changed since
+   restart the scheme; a reversal of all of them at a coarse node goes on
+   backwards in time (inside a coarse step the slow atoms have no node
+   velocity to reverse)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::continue_scheme()
+{
+  const int change = scheme->velocity_change(group_atoms(), clocks->at_coarse_node());
+  if (change == 2)
+    start_scheme("velocities were changed since the last run: restarting the two-step scheme "
+                 "from the current positions and velocities",
+                 true);
+  if ((change == 1) && (comm->me == 0))
+    utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
+                   style);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::setup_pre_reverse(int eflag, int vflag)
+{
+  pre_reverse(eflag, vflag);
+}
+
+/* ----------------------------------------------------------------------
+   the fine steps begin; on the last fine step of a coarse step every atom
+   moves to the primary node, else the atoms that move on fine steps
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::initial_integrate(int /*vflag*/)
+{
+  if (reinit_pending) start_scheme(nullptr, false);
+  reinit_pending = 0;
+  h_step = update->dt;
+  node_impulses();
+  open_steps();
+  check_lists();
+  advance(rule->node[rule->primary()] * h_step);
+}
+
+/* ----------------------------------------------------------------------
+   (re)start the two-step scheme from the current positions, velocities and
+   forces (see fix pe_jump), with a new coarse step; a slow atom's initial
+   kick is over the coarse step
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
@@ -541,23 +490,21 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
   }
-  FixPEJump::start_scheme(why, with_start);
-}
+  if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
 
-/* ---------------------------------------------------------------------- */
-
-double FixPEJumpAsync::kick_step(int i) const
-{
-  return split->coarse(i) ? clocks->steps() * update->dt : update->dt;
-}
-
-/* ----------------------------------------------------------------------
-   inside a coarse step the slow atoms have no node velocity to reverse
-------------------------------------------------------------------------- */
-
-bool FixPEJumpAsync::can_reverse() const
-{
-  return clocks->at_coarse_node();
+  grow_work();
+  if (with_start && rule->has_end_nodes()) store_start_node();
+  const double kick = (opts.init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
+  const double fine = update->dt, coarse = clocks->steps() * update->dt;
+  scheme->start(group_atoms(), atom->f, kick, [&](int i) {
+    return split->coarse(i) ? coarse : fine;
+  });
+  // fixes defined after this one act on the forces after its setup(): redo
+  // the initial kick with the complete forces at the first step
+  reinit_pending =
+      with_start && (opts.init_style == PEJump::Options::KICK) && sampler->has_projections();
+  scheme->started = 1;
+  guard->forget_stats();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -604,7 +551,7 @@ void FixPEJumpAsync::store_start_node()
 
 /* ---------------------------------------------------------------------- */
 
-double FixPEJumpAsync::node_cost()
+double FixPEJumpAsync::node_cost() const
 {
   const auto which = split->active();
   return ((which == InteractionSplit::NONE) || (which == InteractionSplit::ALL))
@@ -626,21 +573,8 @@ void FixPEJumpAsync::pre_force(int /*vflag*/)
 void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 {
   split->restore();
-  FixPEJump::pre_reverse(eflag, vflag);
-}
-
-/* ---------------------------------------------------------------------- */
-
-void FixPEJumpAsync::find_slow()
-{
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  slow.resize(nlocal);
-  slow_atoms.clear();
-  for (int i = 0; i < nlocal; i++) {
-    slow[i] = split->coarse(i);
-    if (slow[i] && (mask[i] & groupbit)) slow_atoms.push_back(i);
-  }
+  eflag_step = eflag;
+  vflag_step = vflag;
 }
 
 /* ----------------------------------------------------------------------
@@ -653,7 +587,7 @@ void FixPEJumpAsync::check_lists()
 {
   const int first = rule->has_end_nodes() ? 1 : 0;
   const double c_lo = rule->node[first];
-  const bool tally = tally_step();
+  const bool tally = nodes->tally_step();
   const double c_hi = tally ? 1.0 : rule->node.back();
   const double coarse_step = clocks->steps() * h_step;
   const bool coarse_end = clocks->last_fine_step();
@@ -669,13 +603,13 @@ void FixPEJumpAsync::check_lists()
     local[3] = MAX(guard->jump2(), stats_slow[1]);
     local[4] = MAX(guard->speed2(), stats_slow[0]);
     if (xhold && (tally || (rule->size() > 1)))
-      local[0] = guard->excursion(group_atoms(&moving_atoms), free_flight(), xhold, c_lo * h_step,
-                                  c_hi * h_step);
+      local[0] = guard->excursion(group_atoms(&assign->moving_atoms), free_flight(), xhold,
+                                  c_lo * h_step, c_hi * h_step);
     finish_check(local);
     return;
   }
   const double cp = rule->node[rule->primary()] * h_step;
-  StabilityGuard::Nodes at{h_step, c_lo * h_step, c_hi * h_step, cp,     slow.data(),
+  StabilityGuard::Nodes at{h_step, c_lo * h_step, c_hi * h_step, cp,     assign->slow(),
                            0.0,    0.0,           coarse_step,   nullptr};
   if (coarse_end) {
     // the coarse nodes q_S^n + c H v_S of the slow atoms, measured from
@@ -683,15 +617,70 @@ void FixPEJumpAsync::check_lists()
     const double elapsed = clocks->start(), span = elapsed + h_step;
     const double *tpos = clocks->times();
     const int nlocal = atom->nlocal;
-    lag.resize(nlocal);
+    std::vector<double> lag(nlocal);    // time by which an atom lags behind
     for (int i = 0; i < nlocal; i++)
       lag[i] = (tpos[i] == AsyncClocks::MOVING) ? 0.0 : elapsed - tpos[i];
     at.lo2 = c_lo * span - elapsed;
     at.hi2 = rule->node.back() * span - elapsed;
     at.lag = lag.data();
+    guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
+  } else {
+    guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
   }
-  guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
   finish_check(local);
+}
+
+/* ----------------------------------------------------------------------
+   act on the stability guard's verdict (the ranks agree)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::finish_check(const double *local)
+{
+  double none = 0.0;
+  if (guard->conclude(
+          style, local, none,
+          [&]() {
+            return scheme->energies(group_atoms())[1];
+          },
+          [&]() {
+            return instability_advice();
+          }))
+    next_reneighbor = update->ntimestep;
+}
+
+/* ----------------------------------------------------------------------
+   fsum = sum_k w_k F_fine(q_k) for the atoms that move on fine steps; the
+   primary node p was evaluated by the Verlet loop, a Lobatto start node is
+   the previous fine step's end node
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::fine_quadrature_sum()
+{
+  const int p = rule->primary();
+  const double wp = rule->weight[p];
+  const int reuse_start = rule->has_end_nodes();
+  double **f = atom->f;
+  double **fstart = scheme->fstart();
+  double **fsum = work->get(SUM);
+  const AtomList &moving = assign->moving_atoms;
+
+  // the end node's forces are the next step's start node
+  if (reuse_start && atom->nlocal)
+    memcpy(&work->get(SAMPLE)[0][0], &f[0][0], 3 * sizeof(double) * atom->nlocal);
+  for (const int i : moving) {
+    if (reuse_start && std::isnan(fstart[i][0]))
+      for (int k = 0; k < 3; k++) fstart[i][k] = f[i][k];
+    for (int k = 0; k < 3; k++) {
+      fsum[i][k] = wp * f[i][k];
+      if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
+    }
+  }
+  const int first = reuse_start ? 1 : 0;
+  if (rule->size() - first <= 1) return;
+  const int evaluated =
+      nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
+                       group_atoms(&moving), opts.sample_mask, fsum, nullptr, true);
+  evals_step += evaluated * node_cost();
 }
 
 /* ----------------------------------------------------------------------
@@ -704,7 +693,8 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 {
   const int reuse_start = rule->has_end_nodes();
   double **fstart_coarse = reuse_start ? state->vec(FSTART_COARSE) : nullptr;
-  for (const int i : slow_atoms) {
+  double **fcoarse = work->get(COARSE);
+  for (const int i : assign->slow_atoms) {
     for (int k = 0; k < 3; k++)
       fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
   }
@@ -712,7 +702,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
   split->activate(InteractionSplit::COARSE);
   const int evaluated =
       nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
-                       group_atoms(&slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
+                       group_atoms(&assign->slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
   evals_step += evaluated * node_cost();
   split->restore();
 }
@@ -726,29 +716,24 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 
 void FixPEJumpAsync::final_integrate()
 {
-  if (watch(OtherFixes::INSIDE_STEP)) note_velocity_changes(&fast_atoms);
+  if (watch(OtherFixes::INSIDE_STEP)) note_velocity_changes(&assign->fast_atoms);
   grow_work();
-  if (nmax_coarse < atom->nmax) {
-    nmax_coarse = atom->nmax;
-    memory->destroy(fcoarse);
-    memory->create(fcoarse, nmax_coarse, 3, "pe_jump/async:fcoarse");
-  }
   const bool coarse_end = clocks->last_fine_step();
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the fine quadrature average itself
   evals_step = split->fraction(InteractionSplit::FINE);
-  const bool direct = (rule->size() == 1) && !split_primary();
+  const bool direct = (rule->size() == 1);
   if (!direct) {
     split->activate(InteractionSplit::FINE);
-    quadrature_sum(&moving_atoms);
+    fine_quadrature_sum();
     split->restore();
   }
   if (coarse_end) coarse_quadrature_sum(clocks->start() + h_step);
 
   // per clock: largest |v|^2, |[v]|^2 (the slow atoms' change at coarse nodes)
   double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
-  double **favg = direct ? atom->f : fsum;
+  double **favg = direct ? atom->f : work->get(SUM);
   if (coarse_end)
     reach_coarse_node(favg, mag);
   else
@@ -761,14 +746,14 @@ void FixPEJumpAsync::final_integrate()
   if (!coarse_end && others->step_observed()) catch_up_all();
 
   split->activate(InteractionSplit::ALL);
-  tally_at_node();
+  evals_step += nodes->at_step_end(eflag_step, vflag_step, others->step_observed());
   split->restore();
   evals_total += evals_step;
   scheme->forget_energies();
 
   // the labels are output only: take them where something looks, when
   // tally_at_node() has brought the ghosts to the node
-  if (coarse_end && (eflag_step || vflag_step || others->step_observed())) label_classes();
+  if (coarse_end && (eflag_step || vflag_step || others->step_observed())) assign->label(*split);
 }
 
 /* ----------------------------------------------------------------------
@@ -787,6 +772,9 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
   double **facc = state->vec(FACC);
   double **fstart = scheme->fstart();
   double *tpos = clocks->times();
+  double **fsample = work->get(SAMPLE);
+  double **fcoarse = work->get(COARSE);
+  const int *slow = assign->slow(), *moving = assign->moving();
   const PEJump::FreeFlight vhalf = free_flight();
   double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? scheme->vsig() : nullptr;
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
@@ -812,7 +800,7 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
     tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
   };
-  for_atoms(nullptr, one);
+  group_atoms().each(atom->mask, atom->nlocal, one);
   for (int k = 0; k < 2; k++)
     stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : StabilityGuard::BLOWUP;
 }
@@ -829,14 +817,18 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
   double **f = atom->f;
   double **facc = state->vec(FACC);
   double **fstart = scheme->fstart();
+  double **fsample = work->get(SAMPLE);
+  const int *moving = assign->moving();
   const PEJump::FreeFlight vhalf = free_flight();
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
-  finish_step(&fast_atoms, favg, rest, mag);
-  for (const int i : slow_moving)
+  scheme->jump_loop(
+      group_atoms(&assign->fast_atoms), favg,
+      {h_step, rest, -1.0, fstart ? fsample : nullptr, watch(OtherFixes::BETWEEN_STEPS)}, mag);
+  for (const int i : assign->slow_moving)
     for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf(i, k);
   // forces on interior slow atoms come only from fixes that add forces
   // (fix enforce2d, the only other one allowed, zeroes a zero component)
-  for (const int i : others->add_forces() ? slow_atoms : slow_moving) {
+  for (const int i : others->add_forces() ? assign->slow_atoms : assign->slow_moving) {
     const double *fa = moving[i] ? favg[i] : f[i];
     for (int k = 0; k < 3; k++) {
       if (fstart) fstart[i][k] = fsample[i][k];
@@ -846,88 +838,35 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
 }
 
 /* ----------------------------------------------------------------------
-   at a coarse node, with the ghosts at the node: slow = on the coarse
-   clock; mixed = fine-clock atom that shares an interaction with a slow
-   atom; fast = the other fine-clock atoms. Also the global counts of the
-   three classes.
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::label_classes()
-{
-  split->mark_interface(interface_flag);
-  gather_flags(interface_flag);
-
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  double *klass = state->val(KLASS);
-  double local[3] = {0.0, 0.0, 0.0};
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit))
-      klass[i] = OUTSIDE;
-    else if (split->coarse(i))
-      klass[i] = SLOW;
-    else
-      klass[i] = interface_flag[i] ? MIXED : FAST;
-    if (klass[i] != OUTSIDE) local[static_cast<int>(klass[i])] += 1.0;
-  }
-  MPI_Allreduce(local, counts, 3, MPI_DOUBLE, MPI_SUM, world);
-}
-
-/* ----------------------------------------------------------------------
-   flags set on ghost atoms are set on their owners too
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::gather_flags(std::vector<int> &flags)
-{
-  reverse_flags = &flags;
-  comm->reverse_comm(this, 1);
-  reverse_flags = nullptr;
-}
-
-/* ----------------------------------------------------------------------
-   the fine clock of the ghost atoms, after assign_buffer()
+   communication for the clock assignment: the fine clock of the ghost
+   atoms (forward), flags set on ghosts (reverse)
 ------------------------------------------------------------------------- */
 
 int FixPEJumpAsync::pack_forward_comm(int n, int *list, double *buf, int /*pbc_flag*/,
                                       int * /*pbc*/)
 {
-  const int *mask = atom->mask;
-  for (int i = 0; i < n; i++) buf[i] = (mask[list[i]] & clockbit) ? 1.0 : 0.0;
-  return n;
+  return assign->pack_forward(n, list, buf);
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::unpack_forward_comm(int n, int first, double *buf)
 {
-  int *mask = atom->mask;
-  for (int i = 0; i < n; i++) {
-    if (buf[i] != 0.0)
-      mask[first + i] |= clockbit;
-    else
-      mask[first + i] &= ~clockbit;
-  }
+  assign->unpack_forward(n, first, buf);
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
 {
-  if (!reverse_flags) return FixPEJump::pack_reverse_comm(n, first, buf);
-  for (int i = 0; i < n; i++) buf[i] = (*reverse_flags)[first + i];
-  return n;
+  return assign->reversing() ? assign->pack_reverse(n, first, buf) : 0;
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::unpack_reverse_comm(int n, int *list, double *buf)
 {
-  if (!reverse_flags) {
-    FixPEJump::unpack_reverse_comm(n, list, buf);
-    return;
-  }
-  for (int i = 0; i < n; i++)
-    if (buf[i] != 0.0) (*reverse_flags)[list[i]] = 1;
+  if (assign->reversing()) assign->unpack_reverse(n, list, buf);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -937,12 +876,21 @@ double FixPEJumpAsync::compute_vector(int n)
   switch (n) {
     case 5:
       return clocks->at_coarse_node() ? 1.0 : 0.0;
+    case 0:
+    case 1:
+      return scheme->energies(group_atoms())[n];
+    case 2:
+      return update->dt;
+    case 3:
+      return evals_step;
+    case 4:
+      return evals_total;
     case 6:
     case 7:
     case 8:
-      return counts[n - 6];
+      return assign->count(n - 6);
   }
-  return FixPEJump::compute_vector(n);
+  return 0.0;
 }
 
 /* ----------------------------------------------------------------------
@@ -952,66 +900,108 @@ double FixPEJumpAsync::compute_vector(int n)
 
 void FixPEJumpAsync::show_classes()
 {
-  vector_atom = state->val(KLASS);
+  vector_atom = assign->classes();
 }
 
-/* ---------------------------------------------------------------------- */
+/* ----------------------------------------------------------------------
+   per-atom state: the table owns it and grows with the owned atoms
+------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::grow_arrays(int nmax)
+void FixPEJumpAsync::grow_arrays(int /*nmax*/)
 {
-  FixPEJump::grow_arrays(nmax);
+  state->ensure(atom->nlocal);
   show_classes();
 }
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJumpAsync::copy_arrays(int i, int j, int delflag)
+void FixPEJumpAsync::copy_arrays(int i, int j, int /*delflag*/)
 {
-  FixPEJump::copy_arrays(i, j, delflag);
+  state->copy(i, j);
   show_classes();
 }
 
-/* ---------------------------------------------------------------------- */
+/* ----------------------------------------------------------------------
+   an atom created during the simulation starts with its velocity and no
+   jump (see fix pe_jump)
+------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::set_arrays(int i)
 {
-  FixPEJump::set_arrays(i);
+  state->reset(i);
+  scheme->mark(i);
+  scheme->fresh = 1;
   show_classes();
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::pack_exchange(int i, double *buf)
+{
+  return state->pack(i, buf);
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJumpAsync::unpack_exchange(int nlocal, double *buf)
 {
-  const int m = FixPEJump::unpack_exchange(nlocal, buf);
+  const int m = state->unpack(nlocal, buf);
   show_classes();
   return m;
 }
 
 /* ---------------------------------------------------------------------- */
 
+int FixPEJumpAsync::pack_restart(int i, double *buf)
+{
+  // written during a run: the velocities are the fix's own
+  if (update->whichflag) scheme->mark(i);
+  return state->pack_restart(i, buf);
+}
+
+/* ---------------------------------------------------------------------- */
+
 void FixPEJumpAsync::unpack_restart(int nlocal, int nth)
 {
-  FixPEJump::unpack_restart(nlocal, nth);
+  // a misfit is told by TwoStep::agree_on_started()
+  if (!state->unpack_restart(nlocal, nth)) scheme->started = -1;
   show_classes();
 }
 
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::size_restart(int /*nlocal*/)
+{
+  return state->restart_size();
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::maxsize_restart()
+{
+  return state->restart_size();
+}
+
 /* ----------------------------------------------------------------------
-   global state: that of fix pe_jump, K, the position inside the coarse step
+   global state: whether the two-step scheme runs, with which rule, the
+   evaluations so far, (two values unused), K and the position inside the
+   coarse step, the buffer layers and the atoms on the fine clock
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::write_restart(FILE *fp)
 {
-  double list[NGLOBAL + NASYNC_GLOBAL];
-  global_state(list);
-  clocks->save(&list[NGLOBAL]);
-  list[NGLOBAL + 3] = saved_buffer;
-  list[NGLOBAL + 4] = saved_clock[0];
-  list[NGLOBAL + 5] = saved_clock[1];
+  double list[NGLOBAL] = {(scheme->started > 0) ? 1.0 : 0.0,
+                          static_cast<double>(rule->family()),
+                          static_cast<double>(rule->points()),
+                          evals_total,
+                          0.0,
+                          0.0};
+  clocks->save(&list[6]);
+  assign->save(&list[9]);
   if (comm->me == 0) {
     int size = sizeof(list);
     fwrite(&size, sizeof(int), 1, fp);
-    fwrite(list, sizeof(double), NGLOBAL + NASYNC_GLOBAL, fp);
+    fwrite(list, sizeof(double), NGLOBAL, fp);
   }
 }
 
@@ -1019,46 +1009,39 @@ void FixPEJumpAsync::write_restart(FILE *fp)
 
 void FixPEJumpAsync::restart(char *buf)
 {
-  FixPEJump::restart(buf);
   auto *list = reinterpret_cast<double *>(buf);
-  if (!clocks->restore(&list[NGLOBAL])) {
-    if (started && (comm->me == 0))
+  const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
+      (static_cast<int>(list[2]) == rule->points());
+  scheme->started = (static_cast<int>(list[0]) != 0) && same_rule;
+  evals_total = list[3];
+  if (!same_rule && (comm->me == 0))
+    utils::logmesg(lmp,
+                   "Fix {}: quadrature differs from the restart file: the two-step scheme "
+                   "restarts from the current state\n",
+                   style);
+  if (!clocks->restore(&list[6])) {
+    if (scheme->started && (comm->me == 0))
       utils::logmesg(lmp,
                      "Fix {}: K differs from the restart file: the two-step scheme restarts "
                      "from the current state\n",
                      style);
-    started = 0;
+    scheme->started = 0;
     return;
   }
-  saved_buffer = static_cast<int>(list[NGLOBAL + 3]);
-  saved_clock[0] = list[NGLOBAL + 4];
-  saved_clock[1] = list[NGLOBAL + 5];
+  assign->restore(&list[9]);
 }
 
 /* ----------------------------------------------------------------------
-   which atoms are on the fine clock (their number and the sum of their
-   IDs): if that changed since the last run (the fast group redefined, a
-   restart with another fast group or buffer), the two-step state of the
-   atoms that changed clock no longer fits. At a coarse node the scheme
-   restarts; inside a coarse step the slow atoms have no node state, so
-   the change is refused.
+   if the atoms on the fine clock changed since the last run (the fast
+   group redefined, a restart with another fast group or buffer), the
+   two-step state of the atoms that changed clock no longer fits. At a
+   coarse node the scheme restarts; inside a coarse step the slow atoms
+   have no node state, so the change is refused.
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::check_clocks()
 {
-  double local[2] = {0.0, 0.0}, clock[2];
-  const int *mask = atom->mask;
-  const tagint *tag = atom->tag;
-  for (int i = 0; i < atom->nlocal; i++)
-    if ((mask[i] & groupbit) && (mask[i] & clockbit)) {
-      local[0] += 1.0;
-      local[1] += static_cast<double>(tag[i]);
-    }
-  MPI_Allreduce(local, clock, 2, MPI_DOUBLE, MPI_SUM, world);
-  const bool changed = (clock[0] != saved_clock[0]) || (clock[1] != saved_clock[1]);
-  saved_clock[0] = clock[0];
-  saved_clock[1] = clock[1];
-  if (!started || !changed) return;
+  if (!assign->changed() || !scheme->started) return;
   if (!clocks->at_coarse_node())
     error->all(FLERR,
                "Fix pe_jump/async: the atoms on the fine clock changed inside a coarse step "
@@ -1070,12 +1053,53 @@ void FixPEJumpAsync::check_clocks()
                    "Fix {}: the atoms on the fine clock changed since the last run: restarting "
                    "the two-step scheme at this coarse node\n",
                    style);
-  started = 0;
+  scheme->started = 0;
 }
 
 /* ---------------------------------------------------------------------- */
 
 double FixPEJumpAsync::memory_usage()
 {
-  return FixPEJump::memory_usage() + static_cast<double>(nmax_coarse) * 3 * sizeof(double);
+  return state->memory_usage() + nodes->memory_usage() + work->memory_usage();
+}
+
+/* ----------------------------------------------------------------------
+   the work arrays of the owned atoms that the rule needs
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::grow_work()
+{
+  const int need = (1 << COARSE) | ((rule->size() > 1) ? 1 << SUM : 0) |
+      (rule->has_end_nodes() ? 1 << SAMPLE : 0);
+  work->ensure(atom->nlocal, need);
+}
+
+/* ---------------------------------------------------------------------- */
+
+PEJump::AtomSet FixPEJumpAsync::group_atoms(const AtomList *only) const
+{
+  return {groupbit, only};
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::watch(int when) const
+{
+  return others->may_change_velocities(when);
+}
+
+/* ----------------------------------------------------------------------
+   the end of a run: remember the velocities
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::post_run()
+{
+  scheme->mark_all(group_atoms());
+}
+
+/* ---------------------------------------------------------------------- */
+
+double FixPEJumpAsync::compute_scalar()
+{
+  return compute_vector(0);
 }

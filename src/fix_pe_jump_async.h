@@ -20,19 +20,27 @@ FixStyle(pe_jump/async,FixPEJumpAsync);
 #ifndef LMP_FIX_PE_JUMP_ASYNC_H
 #define LMP_FIX_PE_JUMP_ASYNC_H
 
-#include "fix_pe_jump.h"
+#include "fix.h"
+#include "pe_jump_node_sampler.h"
+#include "pe_jump_options.h"
 
 #include <string>
-
-#include <vector>
 
 namespace LAMMPS_NS {
 namespace PEJump {
   class AsyncClocks;
+  class AtomState;
+  class ClockAssignment;
+  class ForceSampler;
   class InteractionSplit;
+  class OtherFixes;
+  class Quadrature;
+  class StabilityGuard;
+  class TwoStep;
+  class WorkForces;
 }    // namespace PEJump
 
-class FixPEJumpAsync : public FixPEJump {
+class FixPEJumpAsync : public Fix {
  public:
   FixPEJumpAsync(class LAMMPS *, int, char **);
   ~FixPEJumpAsync() override;
@@ -42,92 +50,97 @@ class FixPEJumpAsync : public FixPEJump {
   void init() override;
   void setup(int) override;
   void setup_post_neighbor() override;
+  void setup_pre_reverse(int, int) override;
+  void initial_integrate(int) override;
   void post_neighbor() override;
   void pre_force(int) override;
   void pre_reverse(int, int) override;
   void final_integrate() override;
+  void post_run() override;
 
+  double compute_scalar() override;
   double compute_vector(int) override;
 
   void grow_arrays(int) override;
   void copy_arrays(int, int, int) override;
   void set_arrays(int) override;
+  int pack_exchange(int, double *) override;
   int unpack_exchange(int, double *) override;
-  void unpack_restart(int, int) override;
   void write_restart(FILE *) override;
   void restart(char *) override;
+  int pack_restart(int, double *) override;
+  void unpack_restart(int, int) override;
+  int size_restart(int) override;
+  int maxsize_restart() override;
   int pack_forward_comm(int, int *, double *, int, int *) override;
   void unpack_forward_comm(int, int, double *) override;
   int pack_reverse_comm(int, int, double *) override;
   void unpack_reverse_comm(int, int *, double *) override;
   double memory_usage() override;
 
- protected:
-  enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
+ private:
+  using AtomList = PEJump::AtomList;
 
-  int finebit;                        // group bit of the fast group
-  std::string fast_group;             // its name, looked up again in init()
-  int clockbit;                       // group bit of the atoms on the fine clock
-  double counts[3];                   // global number of slow, mixed, fast atoms
-  double stats_slow[2];               // largest |v|^2, |[v]|^2 of the local slow atoms
-  std::vector<int> *reverse_flags;    // reverse communication carries these flags
-  bigint split_calls;                 // neighbor->ncalls when the interactions were split
-  bigint topology_at_setup;           // bonds, angles, ... when the run started
-  int changes_seen;                   // another fix changed a velocity (this rank)
-  int saved_buffer;                   // buffer layers of the last run (or restart file)
-  double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
-
+  // the parts: the keywords, the quadrature rule, force evaluation, node
+  // sampling, per-atom state, the scheme's updates, the stability guard,
+  // what other fixes do, the split of the interactions, the clocks, which
+  // atom is on which clock, and the work arrays
+  PEJump::Options opts;
+  PEJump::Quadrature *rule;
+  PEJump::ForceSampler *sampler;
+  PEJump::NodeSampler *nodes;
+  PEJump::AtomState *state;
+  PEJump::TwoStep *scheme;
+  PEJump::StabilityGuard *guard;
+  PEJump::OtherFixes *others;
   PEJump::InteractionSplit *split;
   PEJump::AsyncClocks *clocks;
+  PEJump::ClockAssignment *assign;
+  PEJump::WorkForces *work;    // SUM: fine quadrature sum, SAMPLE: primary force, COARSE
 
   // per-atom state fields: the quadrature sum of the forces on slow atoms
-  // over the fine steps done in this coarse step (force x time), (Lobatto
-  // rules) the slow-interaction force at the coarse start node, and the
-  // class (the clocks add the time of each atom's position)
-  int FACC, FSTART_COARSE, KLASS;
+  // over the fine steps done in this coarse step (force x time) and
+  // (Lobatto rules) the slow-interaction force at the coarse start node
+  int FACC, FSTART_COARSE;
 
-  double **fcoarse;    // work: coarse quadrature sum of the slow interactions
-  int nmax_coarse;
-  std::vector<int> slow;              // owned atoms: 1 if on the coarse clock
-  std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
-  std::vector<int> moving;            // owned atoms: 1 if they move on fine steps
-  std::vector<int> participant;       // owned and ghost atoms: in a fine interaction
-  AtomList moving_atoms;              // the atoms of the group that move on fine steps:
-  AtomList fast_atoms;                // those on the fine clock
-  AtomList slow_moving;               // and the slow ones in a fine interaction
-  AtomList slow_atoms;                // the atoms of the group on the coarse clock
-  std::vector<double> lag;            // work: time by which an atom lags behind
+  int reinit_pending;    // redo the initial kick when all fix forces are in
+  int eflag_step, vflag_step;
+  double h_step;                     // the fine step
+  double evals_step, evals_total;    // force evaluations (units of full ones)
+  double stats_slow[2];              // largest |v|^2, |[v]|^2 of the local slow atoms
+  bigint split_calls;                // neighbor->ncalls when the interactions were split
+  bigint topology_at_setup;          // bonds, angles, ... when the run started
+  int changes_seen;                  // another fix changed a velocity (this rank)
 
-  void start_scheme(const char *, bool) override;
-  void node_impulses() override;
-  double kick_step(int) const override;
-  void store_start_node() override;
-  double node_cost() override;
-  void check_lists() override;
-  void advance(double) override;
-  std::string instability_advice() const override;
-  bool can_reverse() const override;
+  enum { SUM, SAMPLE, COARSE };
+  void grow_work();
+  PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
+  bool watch(int when) const;    // other fixes may change velocities then (OtherFixes hooks)
+  PEJump::FreeFlight free_flight() const;    // fine-clock atoms inside their fine step
 
   bigint topology_count() const;
   void refuse_unsplittable() const;
   void refuse_other_fixes() const;
-  void find_groups();
-  void note_velocity_changes(const AtomList *);
-  void open_steps() override;
-  PEJump::FreeFlight free_flight() const override;
-  bool open_while_moving() const override;
   void check_clocks();
-  void assign_buffer();
-  void find_slow();
-  void find_moving();
+  void start_scheme(const char *, bool);
+  void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
+  void continue_scheme();
+  void node_impulses();
+  void note_velocity_changes(const AtomList *);
+  void open_steps();
+  void check_lists();
+  void finish_check(const double *local);
+  std::string instability_advice() const;
+  void advance(double);
   void slow_magnitudes();
-  void show_classes();    // vector_atom follows the state table
   void catch_up_all();    // the atoms that sit out fine steps catch up
+  double node_cost() const;
+  void fine_quadrature_sum();
   void coarse_quadrature_sum(double coarse_step);
   void reach_coarse_node(double **favg, double mag[2][2]);
   void continue_fine_step(double **favg, double *mag);
-  void label_classes();
-  void gather_flags(std::vector<int> &);
+  void show_classes();                  // vector_atom follows the state table
+  static constexpr int NGLOBAL = 12;    // values of the global restart state
 };
 
 }    // namespace LAMMPS_NS

@@ -13,6 +13,7 @@
 
 #include "pe_jump_atom_state.h"
 
+#include "atom.h"
 #include "memory.h"
 
 #include <utility>
@@ -151,4 +152,25 @@ int AtomState::values() const
 double AtomState::memory_usage() const
 {
   return static_cast<double>(capacity) * values() * sizeof(double);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int AtomState::pack_restart(int i, double *buf) const
+{
+  buf[0] = restart_size();
+  pack(i, &buf[1]);
+  return restart_size();
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool AtomState::unpack_restart(int nlocal, int nth)
+{
+  double **extra = atom->extra;
+  int m = 0;
+  for (int i = 0; i < nth; i++) m += static_cast<int>(extra[nlocal][m]);
+  if (static_cast<int>(extra[nlocal][m]) != restart_size()) return false;
+  unpack(nlocal, &extra[nlocal][m + 1]);
+  return true;
 }

@@ -68,6 +68,13 @@ namespace PEJump {
     int pack(int i, double *buf) const;
     int unpack(int i, const double *buf);
     int values() const;    // values per atom in pack() and unpack()
+
+    // restart files: per atom the count of values, then the values; the
+    // state of the nth fix with per-atom restart data of atom nlocal is
+    // unpacked if its count fits (else false)
+    int pack_restart(int i, double *buf) const;
+    bool unpack_restart(int nlocal, int nth);
+    int restart_size() const { return values() + 1; }
     double memory_usage() const;
 
    private:

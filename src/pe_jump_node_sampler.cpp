@@ -14,11 +14,13 @@
 #include "pe_jump_node_sampler.h"
 
 #include "atom.h"
+#include "comm.h"
 #include "error.h"
 #include "force.h"
 #include "memory.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_quadrature.h"
+#include "update.h"
 
 #include <cstring>
 
@@ -145,4 +147,25 @@ double NodeSampler::potential(int mask)
 double NodeSampler::memory_usage() const
 {
   return 2.0 * nkept * 3 * sizeof(double);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double NodeSampler::at_step_end(int eflag, int vflag, bool observed)
+{
+  if (eflag || vflag) {
+    sampler->compute(ForceSampler::ALL, eflag, vflag);
+    return 1.0;
+  }
+  if (observed) comm->forward_comm();
+  return 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool NodeSampler::tally_step() const
+{
+  const bigint now = update->ntimestep;
+  return (update->eflag_global == now) || (update->eflag_atom == now) ||
+      (update->vflag_global == now) || (update->vflag_atom == now);
 }

@@ -95,6 +95,13 @@ namespace PEJump {
                   const FreeFlight &v, const AtomSet &set, int mask, double **acc, double **fend,
                   bool keep_forces = true);
 
+    // the atoms are at the step end, the forces were taken elsewhere: on
+    // steps that tally energy or virial evaluate everything there (the
+    // forces there replace the others; returns 1 evaluation), else bring
+    // the ghosts there if observed (returns 0)
+    double at_step_end(int eflag, int vflag, bool observed);
+    bool tally_step() const;    // this step tallies energy or virial
+
     // potential energy of the contributions in mask at the current
     // positions (one evaluation; the forces are kept)
     double potential(int mask);

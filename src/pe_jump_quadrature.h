@@ -45,6 +45,9 @@ namespace PEJump {
     // true if the first node is the start of the interval and the last its end,
     // so that the end node of one step is the start node of the next
     bool has_end_nodes() const { return fam == LOBATTO; }
+    // every node is a step end (lobatto 2): atoms of another time
+    // integrator may then interact with the atoms of the rule
+    bool only_end_nodes() const { return (fam == LOBATTO) && (size() == 2); }
 
     // node used for the force evaluation that the MD loop does anyway:
     // the end node for Lobatto rules, the middle (or first past the middle)

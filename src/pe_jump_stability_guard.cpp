@@ -14,7 +14,9 @@
 #include "pe_jump_stability_guard.h"
 
 #include "atom.h"
+#include "error.h"
 #include "neighbor.h"
+#include "update.h"
 
 #include <cmath>
 
@@ -124,4 +126,37 @@ StabilityGuard::Verdict StabilityGuard::judge(const double *global)
   if (global[1] >= limit) return TOO_FAR;
   if (global[0] > limit) return REBUILD;
   return FINE;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool StabilityGuard::conclude(const char *style, const double *local, double &flag,
+                              const std::function<double()> &jump_energy,
+                              const std::function<std::string()> &advice)
+{
+  double values[NMEASURES + 1], global[NMEASURES + 1];
+  for (int k = 0; k < NMEASURES; k++) values[k] = local[k];
+  values[NMEASURES] = flag;
+  MPI_Allreduce(values, global, NMEASURES + 1, MPI_DOUBLE, MPI_MAX, world);
+  flag = global[NMEASURES];
+
+  switch (judge(global)) {
+    case UNSTABLE:
+      error->all(FLERR,
+                 "Fix {} is unstable at step {}: the momentum jumps grew {:.3g}-fold since the "
+                 "start of the run (jump energy {:.8g}). {}",
+                 style, update->ntimestep, growth(), jump_energy(), advice());
+      break;
+    case TOO_FAR:
+      error->all(FLERR,
+                 "Fix {}: atoms move more than half the neighbor skin ({}) between the force "
+                 "evaluations of step {}: reduce the time step (or K) or increase the skin",
+                 style, neighbor->skin, update->ntimestep);
+      break;
+    case REBUILD:
+      return true;
+    case FINE:
+      break;
+  }
+  return false;
 }

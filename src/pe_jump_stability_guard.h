@@ -16,6 +16,9 @@
 
 #include "pe_jump_node_sampler.h"
 
+#include <functional>
+#include <string>
+
 namespace LAMMPS_NS {
 namespace PEJump {
 
@@ -63,6 +66,14 @@ namespace PEJump {
     enum Verdict { FINE, REBUILD, UNSTABLE, TOO_FAR };
     Verdict judge(const double *global);    // the reduced measures
     double growth() const { return last_growth; }
+
+    // reduce the local measures and one more value (flag: in local, out
+    // global, MAX) over the ranks and act on the verdict: an error if the
+    // scheme is unstable (the message gives jump_energy() and advice()) or
+    // atoms move too far; true if a list rebuild is due
+    bool conclude(const char *style, const double *local, double &flag,
+                  const std::function<double()> &jump_energy,
+                  const std::function<std::string()> &advice);
 
    private:
     double stats[2];

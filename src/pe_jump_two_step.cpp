@@ -28,7 +28,7 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
-    Pointers(lmp), state(table), cached_step(-1), cached{0.0, 0.0}
+    Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}
 {
   JUMP = state.add("jump", 3, 0.0);
   VSIG = state.add("vsig", 1, 0.0);
@@ -93,7 +93,7 @@ double TwoStep::inverse_mass_of(int i) const
    that own atoms: every rank must take the same decision
 ------------------------------------------------------------------------- */
 
-int TwoStep::agree_on_started(int started, const AtomSet &set, const char *style) const
+void TwoStep::agree_on_started(const AtomSet &set, const char *style)
 {
   int all_started = 0;
   MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
@@ -116,7 +116,7 @@ int TwoStep::agree_on_started(int started, const AtomSet &set, const char *style
     error->all(FLERR,
                "Fix {}: {} atoms have velocities that are not finite at the start of the run",
                style, all_bad);
-  return (all_started > 0) ? 1 : 0;
+  started = (all_started > 0) ? 1 : 0;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -36,6 +36,9 @@ namespace PEJump {
    public:
     TwoStep(class LAMMPS *, AtomState &, bool start_nodes);
 
+    int started;    // 1 once the state is valid (-1: restart data did not fit)
+    int fresh;      // 1 if atoms were created since the last setup (this rank)
+
     double **jump() const;
     double *vsig() const;
     double **fstart() const;    // nullptr without start nodes
@@ -46,8 +49,8 @@ namespace PEJump {
     double inverse_mass_of(int i) const;
 
     // the ranks agree on started (restart data that does not fit, marked
-    // -1, is told); non-finite velocities are refused. Returns 0 or 1
-    int agree_on_started(int started, const AtomSet &, const char *style) const;
+    // -1, is told); non-finite velocities are refused
+    void agree_on_started(const AtomSet &, const char *style);
 
     // [v]^0 = step(i) F/m: the initial kick (scale 1) or none (scale 0)
     void start(const AtomSet &, double **f, double scale, const std::function<double(int)> &step);

@@ -1,0 +1,297 @@
+/* ----------------------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#include "pe_jump_clock_assignment.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "error.h"
+#include "fix.h"
+#include "group.h"
+#include "pe_jump_async_clocks.h"
+#include "pe_jump_atom_state.h"
+#include "pe_jump_interaction_split.h"
+
+using namespace LAMMPS_NS;
+using namespace LAMMPS_NS::PEJump;
+
+/* ---------------------------------------------------------------------- */
+
+ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int nlayers,
+                                 AtomState &table) :
+    Pointers(lmp),
+    fix(owner), state(table), fast_group(fast), layers(nlayers), finebit(0), clockbit(0),
+    saved_layers(-1), saved_clock{-1.0, -1.0}, reverse_flags(nullptr), counts{0.0, 0.0, 0.0}
+{
+  const int ifast = group->find(fast_group);
+  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", fast_group);
+  finebit = clockbit = group->bitmask[ifast];    // with buffer layers: see find_groups()
+  KLASS = state.add("klass", 1, OUTSIDE);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::create_clock_group()
+{
+  if (layers > 0) group->find_or_create((std::string(fix->id) + "_fine_clock").c_str());
+}
+
+/* ----------------------------------------------------------------------
+   the fast group (and the fine-clock group of the buffer), looked up again
+   at every init: a deleted group's bit may have gone to another group
+   since. The fast group must be a non-empty part of the fix group.
+------------------------------------------------------------------------- */
+
+void ClockAssignment::find_groups()
+{
+  const int ifast = group->find(fast_group);
+  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted", fast_group);
+  finebit = group->bitmask[ifast];
+  clockbit = finebit;
+  if (layers > 0) {
+    const std::string clock_group = std::string(fix->id) + "_fine_clock";
+    const int iclock = group->find(clock_group);
+    if (iclock < 0)
+      error->all(FLERR, "Fix pe_jump/async: its fine-clock group {} was deleted", clock_group);
+    clockbit = group->bitmask[iclock];
+  }
+
+  const int *mask = atom->mask;
+  bigint local[2] = {0, 0};    // fast atoms in the fix group, fast atoms outside it
+  for (int i = 0; i < atom->nlocal; i++) {
+    if (!(mask[i] & finebit)) continue;
+    if (mask[i] & fix->groupbit)
+      ++local[0];
+    else
+      ++local[1];
+  }
+  bigint global[2];
+  MPI_Allreduce(local, global, 2, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (global[1] > 0)
+    error->all(FLERR, "Fix pe_jump/async: {} atoms of the fast group are not in the fix group {}",
+               global[1], group->names[fix->igroup]);
+  if (global[0] == 0)
+    error->all(FLERR, "Fix pe_jump/async: the fast group has no atoms in the fix group");
+}
+
+/* ----------------------------------------------------------------------
+   buffer keyword: the fine clock takes the fast group and, layer by layer,
+   the atoms of the fix group that share an interaction (a bonded one, or a
+   pair of the neighbor lists) with an atom on the fine clock. The slow
+   partners of the interface then move on the fine clock with it, which
+   keeps the period-2 mode of the slow interface atoms out of resonance
+   with the fast region.
+------------------------------------------------------------------------- */
+
+bool ClockAssignment::assign_buffer(bool started, InteractionSplit &split)
+{
+  const bool redo = (layers > 0) && (!started || (layers != saved_layers));
+  saved_layers = layers;
+  if (!redo) return false;
+  int *mask = atom->mask;
+  const int nall = atom->nlocal + atom->nghost;
+  for (int i = 0; i < nall; i++) {
+    if (mask[i] & finebit)
+      mask[i] |= clockbit;
+    else
+      mask[i] &= ~clockbit;
+  }
+  // each layer adds the slow partners of the fine clock; stop early when a
+  // layer adds no atom (everything reachable is on the fine clock)
+  for (int layer = 0; layer < layers; layer++) {
+    split.build();
+    split.mark_fine_participants(participant);
+    gather(participant);
+    int added = 0;
+    for (int i = 0; i < atom->nlocal; i++)
+      if (participant[i] && (mask[i] & fix->groupbit) && !(mask[i] & clockbit)) {
+        mask[i] |= clockbit;
+        added = 1;
+      }
+    comm->forward_comm(fix);
+    int any = 0;
+    MPI_Allreduce(&added, &any, 1, MPI_INT, MPI_MAX, world);
+    if (!any) break;
+  }
+  return true;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool ClockAssignment::changed()
+{
+  double local[2] = {0.0, 0.0}, clock[2];
+  const int *mask = atom->mask;
+  const tagint *tag = atom->tag;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & fix->groupbit) && (mask[i] & clockbit)) {
+      local[0] += 1.0;
+      local[1] += static_cast<double>(tag[i]);
+    }
+  MPI_Allreduce(local, clock, 2, MPI_DOUBLE, MPI_SUM, world);
+  const bool differ = (clock[0] != saved_clock[0]) || (clock[1] != saved_clock[1]);
+  saved_clock[0] = clock[0];
+  saved_clock[1] = clock[1];
+  return differ;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::find_slow(const InteractionSplit &split)
+{
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  slow_flag.resize(nlocal);
+  slow_atoms.clear();
+  for (int i = 0; i < nlocal; i++) {
+    slow_flag[i] = split.coarse(i);
+    if (slow_flag[i] && (mask[i] & fix->groupbit)) slow_atoms.push_back(i);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   atoms that move on fine steps: those on the fine clock and the slow ones
+   that take part in a fine interaction, here or as a ghost elsewhere. A
+   slow atom that joins a fine interaction inside a coarse step catches up
+   with its free flight first.
+------------------------------------------------------------------------- */
+
+bool ClockAssignment::find_moving(const InteractionSplit &split, AsyncClocks &clocks,
+                                  const FreeFlight &vhalf)
+{
+  split.mark_fine_participants(participant);
+  gather(participant);
+
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  moving_flag.resize(nlocal);
+  moving_atoms.clear();
+  fast_atoms.clear();
+  slow_moving.clear();
+  int caught = 0;
+  for (int i = 0; i < nlocal; i++) {
+    moving_flag[i] = !slow_flag[i] || participant[i];
+    if (!(mask[i] & fix->groupbit)) continue;
+    if (moving_flag[i]) {
+      moving_atoms.push_back(i);
+      (slow_flag[i] ? slow_moving : fast_atoms).push_back(i);
+      if (clocks.times()[i] != AsyncClocks::MOVING) {
+        clocks.catch_up(i, vhalf, true);
+        caught = 1;
+      }
+    } else {
+      clocks.hold(i);    // stays here until it is needed
+    }
+  }
+  int any = 0;
+  MPI_Allreduce(&caught, &any, 1, MPI_INT, MPI_MAX, world);
+  return any != 0;
+}
+
+/* ----------------------------------------------------------------------
+   slow = on the coarse clock; mixed = fine-clock atom that shares an
+   interaction with a slow atom; fast = the other fine-clock atoms
+------------------------------------------------------------------------- */
+
+void ClockAssignment::label(const InteractionSplit &split)
+{
+  split.mark_interface(interface_flag);
+  gather(interface_flag);
+
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  double *klass = state.val(KLASS);
+  double local[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & fix->groupbit))
+      klass[i] = OUTSIDE;
+    else if (split.coarse(i))
+      klass[i] = SLOW;
+    else
+      klass[i] = interface_flag[i] ? MIXED : FAST;
+    if (klass[i] != OUTSIDE) local[static_cast<int>(klass[i])] += 1.0;
+  }
+  MPI_Allreduce(local, counts, 3, MPI_DOUBLE, MPI_SUM, world);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double *ClockAssignment::classes() const
+{
+  return state.val(KLASS);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::save(double *list) const
+{
+  list[0] = saved_layers;
+  list[1] = saved_clock[0];
+  list[2] = saved_clock[1];
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::restore(const double *list)
+{
+  saved_layers = static_cast<int>(list[0]);
+  saved_clock[0] = list[1];
+  saved_clock[1] = list[2];
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::gather(std::vector<int> &flags)
+{
+  reverse_flags = &flags;
+  comm->reverse_comm(fix, 1);
+  reverse_flags = nullptr;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int ClockAssignment::pack_forward(int n, const int *list, double *buf) const
+{
+  const int *mask = atom->mask;
+  for (int i = 0; i < n; i++) buf[i] = (mask[list[i]] & clockbit) ? 1.0 : 0.0;
+  return n;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::unpack_forward(int n, int first, const double *buf)
+{
+  int *mask = atom->mask;
+  for (int i = 0; i < n; i++) {
+    if (buf[i] != 0.0)
+      mask[first + i] |= clockbit;
+    else
+      mask[first + i] &= ~clockbit;
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+int ClockAssignment::pack_reverse(int n, int first, double *buf) const
+{
+  for (int i = 0; i < n; i++) buf[i] = (*reverse_flags)[first + i];
+  return n;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::unpack_reverse(int n, const int *list, const double *buf)
+{
+  for (int i = 0; i < n; i++)
+    if (buf[i] != 0.0) (*reverse_flags)[list[i]] = 1;
+}

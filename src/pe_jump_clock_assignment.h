@@ -1,0 +1,104 @@
+/* -*- c++ -*- ----------------------------------------------------------
+   LAMMPS - Large-scale Atomic/Molecular Massively Parallel Simulator
+   https://www.lammps.org/, Sandia National Laboratories
+   LAMMPS development team: developers@lammps.org
+
+   Copyright (2003) Sandia Corporation.  Under the terms of Contract
+   DE-AC04-94AL85000 with Sandia Corporation, the U.S. Government retains
+   certain rights in this software.  This software is distributed under
+   the GNU General Public License.
+
+   See the README file in the top-level LAMMPS directory.
+------------------------------------------------------------------------- */
+
+#ifndef LMP_PE_JUMP_CLOCK_ASSIGNMENT_H
+#define LMP_PE_JUMP_CLOCK_ASSIGNMENT_H
+
+#include "pe_jump_node_sampler.h"
+
+#include <string>
+
+namespace LAMMPS_NS {
+class Fix;
+namespace PEJump {
+  class AsyncClocks;
+  class AtomState;
+  class InteractionSplit;
+
+  // Which atoms of pe_jump/async are on which clock. The fine clock takes
+  // the fast group and, with buffer layers, the slow partners of its
+  // interactions layer by layer: then it is a group of its own, which the
+  // fix creates and which moves with the atoms and into restart files.
+  // After every list build the split interactions give the lists of the
+  // atoms that are slow, and of those that move on fine steps (on the fine
+  // clock, or slow in a fine interaction); at coarse nodes the classes
+  // slow / mixed / fast (per-atom output, a field of the state table).
+
+  class ClockAssignment : protected Pointers {
+   public:
+    enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
+
+    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, int layers, AtomState &);
+
+    void create_clock_group();    // after the fix exists (buffer layers only)
+    void find_groups();           // at init: the group bits, again (groups may be deleted)
+    int clock_bit() const { return clockbit; }
+
+    // at setup: (re)assign the buffer when the scheme starts or the layers
+    // differ from those of the last run or restart file; true if done
+    bool assign_buffer(bool started, InteractionSplit &);
+    // true if the atoms on the fine clock changed since the last call (global)
+    bool changed();
+
+    // after a list build: the slow atoms, then those that move on fine
+    // steps; slow atoms that join a fine interaction catch up (true if
+    // any rank caught up an atom: the ghosts are stale)
+    void find_slow(const InteractionSplit &);
+    bool find_moving(const InteractionSplit &, AsyncClocks &, const FreeFlight &);
+    const int *slow() const { return slow_flag.data(); }
+    const int *moving() const { return moving_flag.data(); }
+    AtomList moving_atoms;    // the atoms of the group that move on fine steps:
+    AtomList fast_atoms;      // those on the fine clock
+    AtomList slow_moving;     // and the slow ones in a fine interaction
+    AtomList slow_atoms;      // the atoms of the group on the coarse clock
+
+    // at a coarse node, with the ghosts at the node: the classes and their
+    // global numbers
+    void label(const InteractionSplit &);
+    double count(int which) const { return counts[which]; }
+    double *classes() const;
+
+    // restart: buffer layers and fine-clock atoms (number, sum of IDs) of
+    // the last run (3 values)
+    void save(double *list) const;
+    void restore(const double *list);
+
+    // communication of the clock bit of the ghosts (forward) and of flags
+    // set on ghosts (reverse): the fix passes its calls on
+    bool reversing() const { return reverse_flags != nullptr; }
+    int pack_forward(int n, const int *list, double *buf) const;
+    void unpack_forward(int n, int first, const double *buf);
+    int pack_reverse(int n, int first, double *buf) const;
+    void unpack_reverse(int n, const int *list, const double *buf);
+
+   private:
+    Fix *fix;
+    AtomState &state;
+    int KLASS;    // state field: the class
+    std::string fast_group;
+    int layers, finebit, clockbit;
+    int saved_layers;                   // buffer layers of the last run (or restart file)
+    double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
+    std::vector<int> slow_flag;         // owned atoms: 1 if on the coarse clock
+    std::vector<int> moving_flag;       // owned atoms: 1 if they move on fine steps
+    std::vector<int> participant;       // owned and ghost atoms: in a fine interaction
+    std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
+    std::vector<int> *reverse_flags;    // reverse communication carries these flags
+    double counts[3];                   // global number of slow, mixed, fast atoms
+    void gather(std::vector<int> &);    // flags set on ghosts are set on their owners
+  };
+
+}    // namespace PEJump
+}    // namespace LAMMPS_NS
+
+#endif
