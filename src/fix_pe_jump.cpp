@@ -34,6 +34,7 @@
 #include "pair.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_auto_quadrature.h"
+#include "pe_jump_first_group.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_options.h"
@@ -168,6 +169,9 @@ int FixPEJump::setmask()
 void FixPEJump::init()
 {
   scheme->init(style);
+  // with neigh_modify include LAMMPS clears and checks the include group
+  // only; pe_jump/async handles the atoms outside it
+  PEJump::FirstGroup(lmp).require_all(groupbit, style);
   if (steps->adapts())
     for (const auto &ifix : modify->get_fix_list())
       if (utils::strmatch(ifix->style, "^dt/reset"))

@@ -40,6 +40,7 @@
 #include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_clock_assignment.h"
+#include "pe_jump_first_group.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_interaction_split.h"
 #include "pe_jump_node_sampler.h"
@@ -58,6 +59,7 @@ using namespace FixConst;
 using PEJump::AsyncClocks;
 using PEJump::AtomState;
 using PEJump::ClockAssignment;
+using PEJump::FirstGroup;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
 using PEJump::NodeSampler;
@@ -70,9 +72,9 @@ using PEJump::StabilityGuard;
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
-    assign(nullptr), work(nullptr), reinit_pending(0), eflag_step(0), vflag_step(0), h_step(0.0),
-    evals_step(0.0), evals_total(0.0), stats_slow{0.0, 0.0}, split_calls(-1), topology_at_setup(0),
-    changes_seen(0)
+    assign(nullptr), work(nullptr), first(nullptr), reinit_pending(0), eflag_step(0), vflag_step(0),
+    h_step(0.0), evals_step(0.0), evals_total(0.0), stats_slow{0.0, 0.0}, split_calls(-1),
+    topology_at_setup(0), changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -107,6 +109,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   assign = new ClockAssignment(lmp, this, arg[4], opts.buffer_layers, *state);
   clocks = new AsyncClocks(lmp, *state, nfine);
   split = new InteractionSplit(lmp, groupbit, assign->clock_bit());
+  first = new FirstGroup(lmp);
 
   time_integrate = 1;
   scalar_flag = 1;
@@ -151,6 +154,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
     atom->delete_callback(id, Atom::RESTART);
   }
   delete[] extlist;
+  delete first;
   delete split;
   delete clocks;
   delete assign;
@@ -179,6 +183,7 @@ void FixPEJumpAsync::init()
   others->sort(*sampler);
   refuse_unsplittable();
   refuse_other_fixes();
+  first->refuse_unsupported(style);
   topology_at_setup = topology_count();
   assign->find_groups();
   split->set_fine_bit(assign->clock_bit());
@@ -334,11 +339,13 @@ void FixPEJumpAsync::post_neighbor()
                "run (from {} to {}), e.g. by a fix that creates or breaks bonds: the "
                "interaction split cannot follow. Use fix pe_jump",
                topology_at_setup, topology_count());
+  first->keep_build_positions();
   split->build();
   split_calls = neighbor->ncalls;
   // atoms are reordered only when the lists are rebuilt
   assign->find_slow(*split);
   if (assign->find_moving(*split, *clocks, free_flight())) comm->forward_comm();
+  first->find_partners(assign->participants(), assign->moving(), groupbit);
 }
 
 /* ----------------------------------------------------------------------
@@ -368,6 +375,7 @@ void FixPEJumpAsync::slow_magnitudes()
 void FixPEJumpAsync::catch_up_all()
 {
   clocks->catch_up_all(free_flight(), assign->moving());
+  first->held_atoms_moved();
 }
 
 /* ----------------------------------------------------------------------
@@ -384,17 +392,20 @@ void FixPEJumpAsync::advance(double t)
   if (!clocks->last_fine_step()) {
     for (const int i : assign->moving_atoms)
       for (int k = 0; k < 3; k++) x[i][k] += t * vhalf(i, k);
-    return;
+  } else {
+    const int *mask = atom->mask;
+    const int nlocal = atom->nlocal;
+    double *tpos = clocks->times();
+    for (int i = 0; i < nlocal; i++) {
+      if (!(mask[i] & groupbit)) continue;
+      const double dt = (tpos[i] == AsyncClocks::MOVING) ? t : clocks->now() - tpos[i];
+      for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
+      tpos[i] = AsyncClocks::MOVING;
+    }
   }
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  double *tpos = clocks->times();
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    const double dt = (tpos[i] == AsyncClocks::MOVING) ? t : clocks->now() - tpos[i];
-    for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
-    tpos[i] = AsyncClocks::MOVING;
-  }
+  // with neigh_modify include, LAMMPS checks the distances of the atoms of
+  // the include group only
+  if (first->moved_too_far(groupbit, clocks->last_fine_step())) next_reneighbor = update->ntimestep;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -409,6 +420,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (split_calls != neighbor->ncalls) post_neighbor();
+  first->require_fine_clock(groupbit, assign->clock_bit(), opts.buffer_layers > 0);
   if (!split->pair_stays_in_lists())
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: it computes forces that are not in "
@@ -565,7 +577,18 @@ double FixPEJumpAsync::node_cost() const
 
 void FixPEJumpAsync::pre_force(int /*vflag*/)
 {
+  first->clear_stale_forces();
   split->activate(InteractionSplit::FINE);
+}
+
+/* ----------------------------------------------------------------------
+   with neigh_modify include, Verlet::setup() cleared the forces of the
+   include group only
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::setup_pre_force(int /*vflag*/)
+{
+  first->clear_before_setup();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -725,8 +748,12 @@ void FixPEJumpAsync::final_integrate()
   evals_step = split->fraction(InteractionSplit::FINE);
   const bool direct = (rule->size() == 1);
   if (!direct) {
+    // with neigh_modify include the node evaluations clear and keep the
+    // forces of the atoms they act on only
     split->activate(InteractionSplit::FINE);
+    sampler->only_touch(first->fine_atoms());
     fine_quadrature_sum();
+    sampler->only_touch(nullptr);
     split->restore();
   }
   if (coarse_end) coarse_quadrature_sum(clocks->start() + h_step);
@@ -748,6 +775,7 @@ void FixPEJumpAsync::final_integrate()
   split->activate(InteractionSplit::ALL);
   evals_step += nodes->at_step_end(eflag_step, vflag_step, others->step_observed());
   split->restore();
+  if (eflag_step || vflag_step) first->forces_written();    // on every atom
   evals_total += evals_step;
   scheme->forget_energies();
 

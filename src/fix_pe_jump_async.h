@@ -31,6 +31,7 @@ namespace PEJump {
   class AsyncClocks;
   class AtomState;
   class ClockAssignment;
+  class FirstGroup;
   class ForceSampler;
   class InteractionSplit;
   class OtherFixes;
@@ -53,6 +54,7 @@ class FixPEJumpAsync : public Fix {
   void setup_pre_reverse(int, int) override;
   void initial_integrate(int) override;
   void post_neighbor() override;
+  void setup_pre_force(int) override;
   void pre_force(int) override;
   void pre_reverse(int, int) override;
   void final_integrate() override;
@@ -96,7 +98,8 @@ class FixPEJumpAsync : public Fix {
   PEJump::InteractionSplit *split;
   PEJump::AsyncClocks *clocks;
   PEJump::ClockAssignment *assign;
-  PEJump::WorkForces *work;    // SUM: fine quadrature sum, SAMPLE: primary force, COARSE
+  PEJump::WorkForces *work;     // SUM: fine quadrature sum, SAMPLE: primary force, COARSE
+  PEJump::FirstGroup *first;    // the opt-in atom_modify first + neigh_modify include
 
   // per-atom state fields: the quadrature sum of the forces on slow atoms
   // over the fine steps done in this coarse step (force x time) and

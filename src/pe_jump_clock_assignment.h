@@ -57,6 +57,7 @@ namespace PEJump {
     bool find_moving(const InteractionSplit &, AsyncClocks &, const FreeFlight &);
     const int *slow() const { return slow_flag.data(); }
     const int *moving() const { return moving_flag.data(); }
+    const int *participants() const { return participant.data(); }    // owned and ghost
     AtomList moving_atoms;    // the atoms of the group that move on fine steps:
     AtomList fast_atoms;      // those on the fine clock
     AtomList slow_moving;     // and the slow ones in a fine interaction

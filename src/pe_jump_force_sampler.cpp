@@ -44,7 +44,8 @@ using namespace LAMMPS_NS::PEJump;
 
 /* ---------------------------------------------------------------------- */
 
-ForceSampler::ForceSampler(LAMMPS *lmp) : Pointers(lmp), omp(nullptr), counted_at(-1)
+ForceSampler::ForceSampler(LAMMPS *lmp) :
+    Pointers(lmp), touched(nullptr), omp(nullptr), counted_at(-1)
 {
   for (double &c : count) c = 0.0;
 }
@@ -104,9 +105,7 @@ void ForceSampler::compute(int mask, int eflag, int vflag)
   comm->forward_comm();
   timer->stamp(Timer::COMM);
 
-  size_t nbytes = sizeof(double) * atom->nlocal;
-  if (force->newton) nbytes += sizeof(double) * atom->nghost;
-  if (nbytes) memset(&atom->f[0][0], 0, 3 * nbytes);
+  clear_forces();
   for (auto *fix : preparations) fix->pre_force(vflag);
   timer->stamp(Timer::MODIFY);
 
@@ -133,6 +132,26 @@ void ForceSampler::compute(int mask, int eflag, int vflag)
     timer->stamp(Timer::COMM);
   }
   project();
+}
+
+/* ----------------------------------------------------------------------
+   the forces of the owned atoms (all, or those touched) and, with newton
+   on, of the ghosts
+------------------------------------------------------------------------- */
+
+void ForceSampler::clear_forces()
+{
+  double **f = atom->f;
+  if (!touched) {
+    size_t nbytes = sizeof(double) * atom->nlocal;
+    if (force->newton) nbytes += sizeof(double) * atom->nghost;
+    if (nbytes) memset(&f[0][0], 0, 3 * nbytes);
+    return;
+  }
+  if (touched->nfirst > 0) memset(&f[0][0], 0, 3 * sizeof(double) * touched->nfirst);
+  for (const int i : *touched->after) f[i][0] = f[i][1] = f[i][2] = 0.0;
+  if (force->newton && (atom->nghost > 0))
+    memset(&f[atom->nlocal][0], 0, 3 * sizeof(double) * atom->nghost);
 }
 
 /* ----------------------------------------------------------------------

@@ -74,7 +74,21 @@ namespace PEJump {
     // parse a contribution name (pair, bond, ..., kspace, all), 0 if unknown
     static int parse(const char *name);
 
+    // the owned atoms whose forces compute() may change, if not all of
+    // them: the first nfirst and those listed. While set, compute() clears
+    // the forces of those (and of the ghosts) only, and NodeSampler::Keep
+    // keeps those only (see FirstGroup: the fine interactions under
+    // neigh_modify include)
+    struct Touched {
+      int nfirst;
+      const std::vector<int> *after;
+    };
+    void only_touch(const Touched *atoms) { touched = atoms; }
+    const Touched *touches() const { return touched; }
+
    private:
+    const Touched *touched;
+    void clear_forces();
     std::vector<Fix *> preparations, projections;
     Fix *omp;    // the OPENMP package's fix, if the /omp styles are in use
     void reduce_threads();

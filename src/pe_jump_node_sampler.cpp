@@ -63,14 +63,14 @@ void NodeSampler::make_room()
 NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomList *atoms,
                         bool keep_forces) :
     nodes(sampler),
-    which(positions), list(atoms), forces(keep_forces)
+    which(positions), list(atoms), forces(keep_forces), touched(sampler.sampler->touches())
 {
   if (nodes.keeping) nodes.error->one(FLERR, "Fix pe_jump: nested NodeSampler::Keep (bug)");
   nodes.keeping = true;
   nodes.make_room();
   const size_t nbytes = 3 * sizeof(double) * nodes.atom->nlocal;
   if (!nbytes) return;
-  if (forces) memcpy(&nodes.fkept[0][0], &nodes.atom->f[0][0], nbytes);
+  if (forces) copy_forces(nodes.atom->f, nodes.fkept);
   double **x = nodes.atom->x;
   if (which == ALL_OWNED) memcpy(&nodes.xkept[0][0], &x[0][0], nbytes);
   if (which == LISTED)
@@ -90,7 +90,23 @@ NodeSampler::Keep::~Keep()
   if (which == LISTED)
     for (const int i : *list)
       for (int k = 0; k < 3; k++) x[i][k] = nodes.xkept[i][k];
-  if (forces) memcpy(&nodes.atom->f[0][0], &nodes.fkept[0][0], nbytes);
+  if (forces) copy_forces(nodes.fkept, nodes.atom->f);
+}
+
+/* ----------------------------------------------------------------------
+   the forces of the owned atoms that the sampler may change (all of them
+   unless it touches a part only)
+------------------------------------------------------------------------- */
+
+void NodeSampler::Keep::copy_forces(double **from, double **to) const
+{
+  if (!touched) {
+    memcpy(&to[0][0], &from[0][0], 3 * sizeof(double) * nodes.atom->nlocal);
+    return;
+  }
+  if (touched->nfirst > 0) memcpy(&to[0][0], &from[0][0], 3 * sizeof(double) * touched->nfirst);
+  for (const int i : *touched->after)
+    for (int k = 0; k < 3; k++) to[i][k] = from[i][k];
 }
 
 /* ---------------------------------------------------------------------- */

@@ -14,6 +14,7 @@
 #ifndef LMP_PE_JUMP_NODE_SAMPLER_H
 #define LMP_PE_JUMP_NODE_SAMPLER_H
 
+#include "pe_jump_force_sampler.h"
 #include "pointers.h"
 
 #include <vector>
@@ -80,6 +81,8 @@ namespace PEJump {
       Positions which;
       const AtomList *list;
       bool forces;
+      const ForceSampler::Touched *touched;    // the sampler touches these only
+      void copy_forces(double **from, double **to) const;
     };
 
     // move the atoms of set to x + shift v and compute the contributions in

@@ -731,3 +731,152 @@ TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused)
     }
   }
 }
+
+/* ----------------------------------------------------------------------
+   the opt-in "atom_modify first G" + "neigh_modify include G" (G holds
+   the atoms on the fine clock): LAMMPS then clears the forces and checks
+   the distances of the atoms of G only, the fix those of the others that
+   need it. The trajectory is that of the same input without the opt-in:
+   bit for bit if the atoms of G are stored first anyway (a band of the
+   lowest IDs), to round-off if LAMMPS reorders them (a disc in the
+   middle: the order of the force sums changes); the lists are rebuilt at
+   the same steps
+------------------------------------------------------------------------- */
+
+namespace {
+
+// 2d triangular lattice (spacing 1, 168 atoms) of harmonic bonds, no pair
+// style: the atoms in region core are type 2, group stiff (stiff bonds among
+// them); region wide is the band core with the rows next to it (periodic)
+void bonded_lattice(Sim &s, const std::string &core, double skin)
+{
+  s.cmds({"units lj",
+          "dimension 2",
+          "atom_style bond",
+          "atom_modify map array",
+          "boundary p p p",
+          "lattice hex 1.1547005383792515",
+          "region box block 0 12 0 7 -0.5 0.5",
+          "create_box 2 box bond/types 2 extra/bond/per/atom 6 extra/special/per/atom 20",
+          "create_atoms 1 box",
+          "mass * 1.0",
+          "region core " + core,
+          "region below block INF INF 0 2.6 INF INF",
+          "region above block INF INF 6.4 INF INF INF",
+          "region wide union 2 below above",
+          "set region core type 2",
+          "group stiff type 2",
+          "group soft subtract all stiff",
+          "bond_style harmonic",
+          "bond_coeff 1 1.0 1.0",
+          "bond_coeff 2 400.0 1.0",
+          "pair_style zero 1.5",
+          "pair_coeff * *",
+          "create_bonds many stiff stiff 2 0.9 1.1",
+          "create_bonds many soft all 1 0.9 1.1",
+          "pair_style none",
+          "comm_modify cutoff 2.5",
+          fmt::format("neighbor {} bin", skin),
+          "neigh_modify every 1 delay 0 check yes",
+          "velocity all create 0.05 4711 dist gaussian",
+          "fix 2d all enforce2d",
+          "timestep 0.005"});
+}
+
+struct LatticeRun {
+  std::vector<double> x;
+  LAMMPS_NS::bigint builds;    // neighbor list builds
+  int nfirst;                  // owned atoms that LAMMPS clears and checks
+};
+
+// include: the group of the opt-in ("" = without it, then without sorting
+// too, which atom_modify first turns off)
+LatticeRun lattice_run(const std::string &core, const std::string &include,
+                       const std::vector<std::string> &run, double skin)
+{
+  Sim s;
+  bonded_lattice(s, core, skin);
+  if (include.empty()) {
+    s.cmd("atom_modify sort 0 0.0");
+  } else {
+    s.cmds({"group fine " + include, "atom_modify first fine", "neigh_modify include fine"});
+  }
+  s.cmds(run);
+  return {positions(s), s.lmp->neighbor->ncalls,
+          include.empty() ? s.lmp->atom->nlocal : s.lmp->atom->nfirst};
+}
+
+}    // namespace
+
+TEST(PEJumpAsync, IncludeGroupKeepsTheTrajectory)
+{
+  struct Case {
+    std::string what, core, include;
+    std::vector<std::string> run;
+    double skin, tolerance;
+  };
+  const std::string band = "block INF INF 0 1.6 INF INF", disc = "sphere 6 6 0 3.5 side in";
+  const std::string async = "fix 1 all pe_jump/async 10 stiff";
+  const std::vector<Case> cases = {
+      {"midpoint", band, "type 2", {async, "run 400"}, 0.3, 0.0},
+      {"lobatto 3", band, "type 2", {async + " quadrature lobatto 3", "run 400"}, 0.3, 0.0},
+      // energy tallies: complete evaluations write forces on every atom
+      {"tallies", band, "type 2", {async, "thermo 7", "run 400"}, 0.3, 0.0},
+      // a small skin: the slow atoms outside the group trigger rebuilds
+      {"rebuilds", band, "type 2", {async + " quadrature lobatto 3", "run 400"}, 0.1, 0.0},
+      // two runs, the second inside a coarse step, one without setup
+      {"split runs", band, "type 2", {async, "run 203", "run 97 pre no", "run 100"}, 0.1, 0.0},
+      // (the row at the top is stored after the others: reordered)
+      {"buffer", band, "region wide", {async + " buffer 1", "run 400"}, 0.3, 1e-12},
+      {"disc",
+       disc,
+       "type 2",
+       {async + " quadrature lobatto 3", "thermo 50", "run 400"},
+       0.1,
+       1e-12},
+  };
+  for (const auto &c : cases) {
+    const auto plain = lattice_run(c.core, "", c.run, c.skin);
+    const auto first = lattice_run(c.core, c.include, c.run, c.skin);
+    // the opt-in took effect: LAMMPS clears and checks a part of the atoms
+    EXPECT_LE(first.nfirst, 168 / 2) << c.what;
+    EXPECT_GT(first.nfirst, 0) << c.what;
+    EXPECT_LE(max_diff(plain.x, first.x), c.tolerance) << c.what;
+    EXPECT_EQ(plain.builds, first.builds) << c.what;
+    if (c.skin < 0.1) EXPECT_GT(plain.builds, 3) << c.what;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   what the opt-in cannot work with is refused
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, IncludeGroupRefusals)
+{
+  const auto error_with = [](const std::string &include, const std::vector<std::string> &more) {
+    Sim s;
+    bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
+    s.cmds({"group fine " + include, "atom_modify first fine", "neigh_modify include fine"});
+    try {
+      s.cmds(more);
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string async = "fix 1 all pe_jump/async 10 stiff";
+  EXPECT_THAT(error_with("type 2", {async, "run 10"}), ContainsRegex("no error"));
+  EXPECT_THAT(error_with("id 1:10", {async, "run 0"}),
+              ContainsRegex("atoms on the fine clock \\(the fast group\\) are not in the "
+                            "neigh_modify include group fine"));
+  EXPECT_THAT(error_with("type 2", {async + " buffer 1", "run 0"}),
+              ContainsRegex("fast group and its buffer layers\\) are not in the"));
+  EXPECT_THAT(error_with("type 2", {"pair_style zero 1.0", "pair_coeff * *", async, "run 0"}),
+              ContainsRegex("pair forces of the atoms outside it \\(pair style zero\\) would be "
+                            "lost"));
+  EXPECT_THAT(error_with("type 2", {"fix 1 all pe_jump", "run 0"}),
+              ContainsRegex("moves every atom of its group every step, but 120 of them are not"));
+  EXPECT_THAT(error_with("type 2", {"fix 1 stiff pe_jump", "run 5"}), ContainsRegex("no error"));
+  EXPECT_THAT(error_with("type 2", {async, "fix 3 all deform 1 x scale 1.01", "run 0"}),
+              ContainsRegex("does not support a box that changes"));
+}

@@ -10,7 +10,10 @@ Scenes (one MPI rank, no suffix):
   bonded   2d triangular lattice, every spring a harmonic bond (no pair
            style), stiff inclusion of 10% of the atoms (K x2500), 40000
            atoms, h = 0.005, 4000 steps: nve, pe_jump midpoint / lobatto 3,
-           pe_jump/async 50 stiff midpoint / lobatto 3   (bench/cost/in.bonded_lattice)
+           pe_jump/async 50 stiff midpoint / lobatto 3, each also with the
+           opt-in atom_modify first + neigh_modify include stiff ("first";
+           "first 2d": and fix enforce2d on stiff only)
+                                                          (bench/cost/in.bonded_lattice)
   lj       LJ liquid, 32000 atoms, 200 steps: nve, pe_jump midpoint /
            lobatto 3                                      (bench/inputs/in.lj)
   springs  the spring lattice of bench.py (16800 atoms, soft pair table,
@@ -43,13 +46,21 @@ FULL = dict(bonded_nx=200, bonded_ny=200, bonded_h=0.005, bonded_steps=4000, bon
 QUICK = dict(FULL, bonded_nx=60, bonded_ny=60, bonded_steps=400, bonded_thermo=200,
              lj_ncell=8, lj_steps=50, springs_nx=60, springs_ny=70, springs_steps=200)
 
-# (scene, name, integrator, quadrature, K)
+# (scene, name, integrator, quadrature, K[, extra input variables])
+# "first": the opt-in atom_modify first + neigh_modify include stiff; "2d":
+# also fix enforce2d on that group only (LAMMPS then loops over it only)
+FIRST = {"first": "stiff"}
+FIRST_2D = {"first": "stiff", "e2d": "stiff"}
 CONFIGS = [
     ("bonded", "nve", "nve", None, None),
     ("bonded", "pe_jump midpoint", "pe_jump", "midpoint", None),
     ("bonded", "pe_jump lobatto 3", "pe_jump", "lobatto 3", None),
     ("bonded", "async 50 midpoint", "async", "midpoint", 50),
     ("bonded", "async 50 lobatto 3", "async", "lobatto 3", 50),
+    ("bonded", "async 50 midpoint first", "async", "midpoint", 50, FIRST),
+    ("bonded", "async 50 lobatto 3 first", "async", "lobatto 3", 50, FIRST),
+    ("bonded", "async 50 midpoint first 2d", "async", "midpoint", 50, FIRST_2D),
+    ("bonded", "async 50 lobatto 3 first 2d", "async", "lobatto 3", 50, FIRST_2D),
     ("lj", "nve", "nve", None, None),
     ("lj", "pe_jump midpoint", "pe_jump", "midpoint", None),
     ("lj", "pe_jump lobatto 3", "pe_jump", "lobatto 3", None),
@@ -74,6 +85,14 @@ TARGETS = [
     ("bonded.async_midpoint_speedup", "bonded lattice: async K=50 midpoint speed-up over sync", ">=", 5.0),
     ("bonded.async_lobatto3_speedup", "bonded lattice: async K=50 lobatto 3 speed-up over sync", ">=", 5.0),
 ]
+# the same async targets with the opt-in (configurations "... first", "... first 2d")
+ASYNC_VARIANTS = (("", ""), (" first", "_first"), (" first 2d", "_first_2d"))
+for _name, _key in ASYNC_VARIANTS[1:]:
+    for _q, _qk in (("midpoint", "midpoint"), ("lobatto 3", "lobatto3")):
+        TARGETS.append((f"bonded.async_{_qk}{_key}_wall_per_eval",
+                        f"bonded lattice: async K=50 {_q}{_name} wall/eval ratio", "<=", 1.15))
+        TARGETS.append((f"bonded.async_{_qk}{_key}_speedup",
+                        f"bonded lattice: async K=50 {_q}{_name} speed-up over sync", ">=", 5.0))
 
 # further figures shown in the report (no target)
 EXTRA = [
@@ -158,8 +177,9 @@ def prepare(c, scenes):
     return out
 
 
-def run_one(sc, scene, name, integ, quad, K, rep):
+def run_one(sc, scene, name, integ, quad, K, rep, extra=None):
     v = dict(sc["base"])
+    v.update(extra or {})
     v["integrator"] = integ
     if quad:
         v["quad"] = quad
@@ -250,15 +270,17 @@ def derive(runs):
             f["lobatto3_extra_node_total"] = (tot(l3) - tot(mid)) / sum(nve["breakdown"].get(k) or 0.0
                                                                        for k in ("Pair", "Bond"))
             f["bare_eval_category"] = bare_cat
-        for q, key in (("midpoint", "midpoint"), ("lobatto 3", "lobatto3")):
-            s = med.get(cfg_id(scene, f"pe_jump {q}"))
-            a = med.get(cfg_id(scene, f"async 50 {q}"))
-            if s and a and s["evals"] and a["evals"]:
-                er = a["evals"] / s["evals"]
-                f[f"async_{key}_eval_ratio"] = er
-                f[f"async_{key}_wall_ratio"] = a["loop_time"] / s["loop_time"]
-                f[f"async_{key}_wall_per_eval"] = (a["loop_time"] / s["loop_time"]) / er
-                f[f"async_{key}_speedup"] = s["loop_time"] / a["loop_time"]
+        for q, qkey in (("midpoint", "midpoint"), ("lobatto 3", "lobatto3")):
+            for vname, vkey in ASYNC_VARIANTS:
+                key = qkey + vkey
+                s = med.get(cfg_id(scene, f"pe_jump {q}"))
+                a = med.get(cfg_id(scene, f"async 50 {q}{vname}"))
+                if s and a and s["evals"] and a["evals"]:
+                    er = a["evals"] / s["evals"]
+                    f[f"async_{key}_eval_ratio"] = er
+                    f[f"async_{key}_wall_ratio"] = a["loop_time"] / s["loop_time"]
+                    f[f"async_{key}_wall_per_eval"] = (a["loop_time"] / s["loop_time"]) / er
+                    f[f"async_{key}_speedup"] = s["loop_time"] / a["loop_time"]
         if f:
             fig[scene] = f
     targets = []
@@ -295,12 +317,14 @@ def measure(args):
     sc = prepare(c, scenes)
     configs = [cf for cf in CONFIGS if cf[0] in scenes]
     log(f"label {args.label}: {len(configs)} configurations x {args.reps} repetitions, binary {lmp}")
-    runs = {cfg_id(s, n): {"scene": s, "name": n, "integrator": i, "quad": q, "K": K, "reps": []}
-            for (s, n, i, q, K) in configs}
+    runs = {cfg_id(s, n): {"scene": s, "name": n, "integrator": i, "quad": q, "K": K,
+                           "vars": (cf[5] if len(cf) > 5 else {}), "reps": []}
+            for cf in configs for (s, n, i, q, K) in [cf[:5]]}
     t0 = time.time()
     for rep in range(args.reps):
-        for (s, n, i, q, K) in configs:
-            r = run_one(sc[s], s, n, i, q, K, rep)
+        for cf in configs:
+            (s, n, i, q, K), extra = cf[:5], (cf[5] if len(cf) > 5 else None)
+            r = run_one(sc[s], s, n, i, q, K, rep, extra)
             runs[cfg_id(s, n)]["reps"].append(r)
             bd = r["breakdown"]
             log(f"  {s:8s} {n:20s} rep {rep}: loop {r['loop_time']:8.3f} s  Modify {bd.get('Modify') or 0:7.3f}"
