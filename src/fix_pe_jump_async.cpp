@@ -73,8 +73,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
     assign(nullptr), work(nullptr), first(nullptr), reinit_pending(0), eflag_step(0), vflag_step(0),
-    h_step(0.0), evals_step(0.0), evals_total(0.0), stats_slow{0.0, 0.0}, split_calls(-1),
-    topology_at_setup(0), changes_seen(0)
+    h_step(0.0), evals_step(0.0), evals_total(0.0), changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -184,7 +183,7 @@ void FixPEJumpAsync::init()
   refuse_unsplittable();
   refuse_other_fixes();
   first->refuse_unsupported(style);
-  topology_at_setup = topology_count();
+  split->start_run();
   assign->find_groups();
   split->set_fine_bit(assign->clock_bit());
   maxexchange = state->values();
@@ -315,33 +314,15 @@ PEJump::FreeFlight FixPEJumpAsync::free_flight() const
 }
 
 /* ----------------------------------------------------------------------
-   number of bonds, angles, dihedrals and impropers of the system
-------------------------------------------------------------------------- */
-
-bigint FixPEJumpAsync::topology_count() const
-{
-  if (atom->molecular == Atom::ATOMIC) return 0;
-  return atom->nbonds + atom->nangles + atom->ndihedrals + atom->nimpropers;
-}
-
-/* ----------------------------------------------------------------------
    the lists were rebuilt: split them again (the clocks of the atoms never
    change, so the split does not depend on when it is done)
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::post_neighbor()
 {
-  // the classes of the interactions hold for the whole run: the topology
-  // must not change (fix bond/create, bond/break, ...)
-  if (topology_count() != topology_at_setup)
-    error->all(FLERR,
-               "Fix pe_jump/async: the bonds, angles, dihedrals or impropers changed during the "
-               "run (from {} to {}), e.g. by a fix that creates or breaks bonds: the "
-               "interaction split cannot follow. Use fix pe_jump",
-               topology_at_setup, topology_count());
+  split->check_topology();
   first->keep_build_positions();
   split->build();
-  split_calls = neighbor->ncalls;
   // atoms are reordered only when the lists are rebuilt
   assign->find_slow(*split);
   if (assign->find_moving(*split, *clocks, free_flight())) comm->forward_comm();
@@ -355,9 +336,9 @@ void FixPEJumpAsync::post_neighbor()
 
 void FixPEJumpAsync::slow_magnitudes()
 {
-  stats_slow[0] = stats_slow[1] = 0.0;
   double **v = atom->v;
   double **jump = scheme->jump();
+  double most[2] = {0.0, 0.0};
   for (const int i : assign->slow_atoms) {
     double vv = 0.0, jj = 0.0;
     for (int k = 0; k < 3; k++) {
@@ -365,9 +346,10 @@ void FixPEJumpAsync::slow_magnitudes()
       vv += vhalf * vhalf;
       jj += jump[i][k] * jump[i][k];
     }
-    stats_slow[0] = MAX(stats_slow[0], vv);
-    stats_slow[1] = MAX(stats_slow[1], jj);
+    most[0] = MAX(most[0], vv);
+    most[1] = MAX(most[1], jj);
   }
+  guard->set_slow_stats(most[0], most[1]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -416,10 +398,10 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
-  if (assign->assign_buffer(scheme->started, *split)) split_calls = -1;
+  if (assign->assign_buffer(scheme->started, *split)) split->invalidate();
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
-  if (split_calls != neighbor->ncalls) post_neighbor();
+  if (!split->up_to_date()) post_neighbor();
   first->require_fine_clock(groupbit, assign->clock_bit(), opts.buffer_layers > 0);
   if (!split->pair_stays_in_lists())
     error->all(FLERR,
@@ -621,10 +603,10 @@ void FixPEJumpAsync::check_lists()
     // nodes' excursions matter only for the atoms that move to them, and
     // not at all if the Verlet loop checks the only node
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
-    local[1] = MAX(hf2 * guard->speed2(), hs2 * stats_slow[0]);
-    local[2] = MAX(hf2 * guard->jump2(), hs2 * stats_slow[1]);
-    local[3] = MAX(guard->jump2(), stats_slow[1]);
-    local[4] = MAX(guard->speed2(), stats_slow[0]);
+    local[1] = MAX(hf2 * guard->speed2(), hs2 * guard->slow_speed2());
+    local[2] = MAX(hf2 * guard->jump2(), hs2 * guard->slow_jump2());
+    local[3] = MAX(guard->jump2(), guard->slow_jump2());
+    local[4] = MAX(guard->speed2(), guard->slow_speed2());
     if (xhold && (tally || (rule->size() > 1)))
       local[0] = guard->excursion(group_atoms(&assign->moving_atoms), free_flight(), xhold,
                                   c_lo * h_step, c_hi * h_step);
@@ -803,34 +785,39 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
   double **fsample = work->get(SAMPLE);
   double **fcoarse = work->get(COARSE);
   const int *slow = assign->slow(), *moving = assign->moving();
-  const PEJump::FreeFlight vhalf = free_flight();
   double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? scheme->vsig() : nullptr;
+  const double *rmass = atom->rmass;
+  const double *minv = scheme->inverse_masses();
+  const int *type = atom->type;
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   const double coarse_step = clocks->start() + h_step;
+  const double kick_fine = 2.0 * h_step * force->ftm2v;
+  const double kick_coarse = 2.0 * coarse_step * force->ftm2v;
   const auto one = [&](int i) {
     const double dt = (tpos[i] == AsyncClocks::MOVING) ? rest : coarse_step - tpos[i];
-    for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
     if (fstart)
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
     // interior slow atoms have no fine interactions: only other fixes' forces
     const double *fa = moving[i] ? favg[i] : f[i];
+    const double inv = rmass ? 1.0 / rmass[i] : minv[type[i]];
     if (!slow[i]) {
-      scheme->jump_atom(i, h_step, fa, mag[0]);
+      for (int k = 0; k < 3; k++) x[i][k] += dt * v[i][k];
+      PEJump::TwoStep::jump_one(kick_fine * inv, fa, v[i], jump[i], mag[0]);
     } else {
       double fslow[3];
       for (int k = 0; k < 3; k++) {
         fslow[k] = (facc[i][k] + h_step * fa[k]) / coarse_step + fcoarse[i][k];
         facc[i][k] = 0.0;
+        v[i][k] += 0.5 * jump[i][k];    // into its step
+        x[i][k] += dt * v[i][k];
       }
-      for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];    // into its step
-      scheme->jump_atom(i, coarse_step, fslow, mag[1]);
+      PEJump::TwoStep::jump_one(kick_coarse * inv, fslow, v[i], jump[i], mag[1]);
     }
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
     tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
   };
   group_atoms().each(atom->mask, atom->nlocal, one);
-  for (int k = 0; k < 2; k++)
-    stats_slow[k] = std::isfinite(mag[1][k]) ? mag[1][k] : StabilityGuard::BLOWUP;
+  guard->set_slow_stats(mag[1][0], mag[1][1]);
 }
 
 /* ----------------------------------------------------------------------

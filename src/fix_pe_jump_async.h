@@ -110,9 +110,6 @@ class FixPEJumpAsync : public Fix {
   int eflag_step, vflag_step;
   double h_step;                     // the fine step
   double evals_step, evals_total;    // force evaluations (units of full ones)
-  double stats_slow[2];              // largest |v|^2, |[v]|^2 of the local slow atoms
-  bigint split_calls;                // neighbor->ncalls when the interactions were split
-  bigint topology_at_setup;          // bonds, angles, ... when the run started
   int changes_seen;                  // another fix changed a velocity (this rank)
 
   enum { SUM, SAMPLE, COARSE };
@@ -121,7 +118,6 @@ class FixPEJumpAsync : public Fix {
   bool watch(int when) const;    // other fixes may change velocities then (OtherFixes hooks)
   PEJump::FreeFlight free_flight() const;    // fine-clock atoms inside their fine step
 
-  bigint topology_count() const;
   void refuse_unsplittable() const;
   void refuse_other_fixes() const;
   void check_clocks();

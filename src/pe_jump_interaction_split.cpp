@@ -14,6 +14,7 @@
 #include "pe_jump_interaction_split.h"
 
 #include "atom.h"
+#include "error.h"
 #include "force.h"
 #include "neigh_list.h"
 #include "neighbor.h"
@@ -28,7 +29,8 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 InteractionSplit::InteractionSplit(LAMMPS *lmp, int group, int fast) :
-    Pointers(lmp), groupbit(group), finebit(fast), current(NONE), hybrid_topology(0), saved_ago(0)
+    Pointers(lmp), groupbit(group), finebit(fast), current(NONE), hybrid_topology(0), saved_ago(0),
+    built_at(-1), topology(0)
 {
   frac[FINE] = frac[COARSE] = 0.0;
   topo[0] = {0, &neighbor->nbondlist, &neighbor->bondlist, 2, 0, nullptr, 0};
@@ -71,9 +73,44 @@ int InteractionSplit::klass(const int *atoms, int n) const
 
 /* ---------------------------------------------------------------------- */
 
+bool InteractionSplit::up_to_date() const
+{
+  return built_at == neighbor->ncalls;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bigint InteractionSplit::topology_count() const
+{
+  if (atom->molecular == Atom::ATOMIC) return 0;
+  return atom->nbonds + atom->nangles + atom->ndihedrals + atom->nimpropers;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::start_run()
+{
+  topology = topology_count();
+}
+
+/* ---------------------------------------------------------------------- */
+
+void InteractionSplit::check_topology() const
+{
+  if (topology_count() != topology)
+    error->all(FLERR,
+               "Fix pe_jump/async: the bonds, angles, dihedrals or impropers changed during the "
+               "run (from {} to {}), e.g. by a fix that creates or breaks bonds: the "
+               "interaction split cannot follow. Use fix pe_jump",
+               topology, topology_count());
+}
+
+/* ---------------------------------------------------------------------- */
+
 void InteractionSplit::build()
 {
   restore();
+  built_at = neighbor->ncalls;
 
   // perpetual neighbor lists requested by pair styles (one for a plain pair
   // style, one per sub-style for pair hybrid)

@@ -51,6 +51,14 @@ namespace PEJump {
     // build both subsets from the current neighbor and topology lists;
     // collective call, after every neighbor list build
     void build();
+    bool up_to_date() const;                // built from the current lists
+    void invalidate() { built_at = -1; }    // the clocks changed: build again
+
+    // the classes of the interactions hold for a whole run: the number of
+    // bonds, angles, dihedrals and impropers must not change (fix
+    // bond/create, bond/break, ...). start_run() at init, then check
+    void start_run();
+    void check_topology() const;
 
     // swap the lists of one subset in, and the complete lists back
     void activate(Subset);
@@ -83,6 +91,9 @@ namespace PEJump {
     int hybrid_topology;
     int saved_ago;
     double frac[2];
+    bigint built_at;    // neighbor->ncalls at the last build
+    bigint topology;    // bonds, angles, ... when the run started
+    bigint topology_count() const;
 
     // one pair neighbor list, its original arrays and both subsets
     struct PairSubset {

@@ -29,7 +29,7 @@ static constexpr double HINT_GROWTH = 2.0;      // ... that is instability if at
 /* ---------------------------------------------------------------------- */
 
 StabilityGuard::StabilityGuard(LAMMPS *lmp) :
-    Pointers(lmp), stats{0.0, 0.0}, valid(false), jump_ref(0.0), last_growth(0.0)
+    Pointers(lmp), stats{0.0, 0.0}, slow{0.0, 0.0}, valid(false), jump_ref(0.0), last_growth(0.0)
 {
 }
 
@@ -48,6 +48,14 @@ void StabilityGuard::set_stats(double vv, double jj)
   stats[0] = std::isfinite(vv) ? vv : BLOWUP;
   stats[1] = std::isfinite(jj) ? jj : BLOWUP;
   valid = true;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StabilityGuard::set_slow_stats(double vv, double jj)
+{
+  slow[0] = std::isfinite(vv) ? vv : BLOWUP;
+  slow[1] = std::isfinite(jj) ? jj : BLOWUP;
 }
 
 /* ---------------------------------------------------------------------- */

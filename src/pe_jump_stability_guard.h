@@ -45,6 +45,11 @@ namespace PEJump {
     bool has_stats() const { return valid; }
     double speed2() const { return stats[0]; }
     double jump2() const { return stats[1]; }
+    // the same for the atoms on a coarse clock (pe_jump/async), whose
+    // velocities change only at coarse nodes
+    void set_slow_stats(double vv, double jj);
+    double slow_speed2() const { return slow[0]; }
+    double slow_jump2() const { return slow[1]; }
 
     // the measures of the atoms of set from their state, for steps of size
     // h: nodes at t in [lo, hi]; atoms with select[i] != 0 take steps of
@@ -76,7 +81,7 @@ namespace PEJump {
                   const std::function<std::string()> &advice);
 
    private:
-    double stats[2];
+    double stats[2], slow[2];
     bool valid;
     double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
     double last_growth;

@@ -151,13 +151,7 @@ void TwoStep::open(const AtomSet &set, bool fingerprint) const
 
 void TwoStep::jump_atom(int i, double h, const double *favg, double *mag) const
 {
-  const double dtfm = 2.0 * h * force->ftm2v * inverse_mass_of(i);
-  double *v = atom->v[i];
-  double *jmp = jump()[i];
-  double vnew[3];
-  for (int k = 0; k < 3; k++) vnew[k] = jump_component(dtfm * favg[k], v[k], jmp[k]);
-  mag[0] = MAX(mag[0], vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
-  mag[1] = MAX(mag[1], jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
+  jump_one(2.0 * h * force->ftm2v * inverse_mass_of(i), favg, atom->v[i], jump()[i], mag);
 }
 
 /* ---------------------------------------------------------------------- */

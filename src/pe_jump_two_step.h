@@ -75,6 +75,15 @@ namespace PEJump {
     // its forces over a step h; mag: the largest |v^{n+3/2}|^2 and
     // |[v]^{n+1}|^2 so far
     void jump_atom(int i, double h, const double *favg, double *mag) const;
+    // the same for an atom with velocity v and jump jmp, dtfm = 2 h ftm2v / m
+    static void jump_one(double dtfm, const double *favg, double *v, double *jmp, double *mag)
+    {
+      double vnew[3];
+      for (int k = 0; k < 3; k++) vnew[k] = jump_component(dtfm * favg[k], v[k], jmp[k]);
+      mag[0] = MAX(mag[0], vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
+      mag[1] = MAX(mag[1], jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
+    }
+    const double *inverse_masses() const { return inverse_mass.data(); }    // per type
 
     // the atoms of set jump with favg over the step h and move on by rest
     // (from the primary node to the step end); fstart gets the start-node
