@@ -5,7 +5,10 @@ For every reference log examples/<example>/log.<date>.<name>.<compiler>.<np>
 this tool
 
 * works out how the log was made: the -var settings from the example's
-  README.md (a paragraph or table row that names the log and gives `-var ...`,
+  README.md (a table row or, after the rows, a paragraph that names the log
+  and gives `-var ...` in backticks; a backticked command with `-in in.<x>`
+  also gives the input, for examples with several inputs; a paragraph ends at
+  a blank line, at a line naming another log or at the next list item),
   or a command line `lmp -in in.<x> -var ...` in the README or in the comment
   lines echoed at the top of the log whose -var value matches the suffix of the
   log name, e.g. log...lj-langevin-lobatto3... <- -var rule "lobatto 3");
@@ -95,31 +98,45 @@ def command_lines(text, infile):
     return cands
 
 
+def input_of(text):
+    """the input file named by `-in <file>` (or `-i`) in a command, or None."""
+    m = re.search(r"(?:^|\s)(?:-in|-i)\s+(\S+)", text)
+    return os.path.basename(m.group(1)) if m else None
+
+
 def paragraph_vars(readme, logname):
-    """-var settings given next to a mention of the log in the README."""
+    """-var settings given next to a mention of the log in the README.
+
+    -> list of (input file or None, var list); the table rows that name the
+    log come first (a row is specific to the log), then the paragraphs. A
+    paragraph ends at a blank line, at a line that names another log, or at
+    the next list item. A backticked command that names its input with
+    `-in in.<x>` gives that input (examples with several inputs)."""
     m = LOG_RE.match(logname)
     stem = "log.%s.%s." % (m.group(1), m.group(2))
     lines = readme.splitlines()
-    found = []
+    rows, paras = [], []
     for k, line in enumerate(lines):
         if stem not in line:
             continue
         if line.lstrip().startswith("|"):
-            para = [line]                      # a table row: that row only
+            para, found = [line], rows          # a table row: that row only
         else:
-            para = []
+            para, found = [], paras
             for l2 in lines[k:]:
                 if not l2.strip():
                     break
                 if l2 is not line and "log." in l2 and stem not in l2:
+                    break
+                if l2 is not line and re.match(r"\s*(?:[*+-]|\d+\.)\s", l2):
                     break
                 para.append(l2)
         text = "\n".join(para)
         for seg in re.findall(r"`([^`]*-var\s[^`]*)`", text):
             v = parse_var_args(seg)
             if v:
-                found.append(v)
-    return found
+                found.append((input_of(seg), v))
+    return rows + paras
 
 
 def norm(s):
@@ -147,7 +164,12 @@ def run_spec(exdir, logname):
 
     para = paragraph_vars(readme, logname)
     if para:
-        return infile, para[0], "README text next to the log name"
+        given, vars_ = para[0]
+        if given is not None:
+            if given not in inputs:
+                return None, None, "the README names input %s, which is not here" % given
+            infile = given
+        return infile, vars_, "README text next to the log name"
     if suffix == "":
         return infile, [], "default run (no suffix in the log name)"
     # command lines of the README and of the input's comments echoed in the log
