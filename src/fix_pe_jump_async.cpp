@@ -183,6 +183,11 @@ void FixPEJumpAsync::init()
   refuse_unsplittable();
   refuse_other_fixes();
   first->refuse_unsupported(style);
+  if (first->active() && assign->follows_group())
+    error->all(FLERR,
+               "Fix pe_jump/async cannot follow the dynamic fast group {} with neigh_modify "
+               "include: atoms would change clock outside the include group",
+               assign->fast_group_name());
   split->start_run();
   assign->find_groups();
   split->set_fine_bit(assign->clock_bit());
@@ -463,10 +468,77 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
   if (reinit_pending) start_scheme(nullptr, false);
   reinit_pending = 0;
   h_step = update->dt;
+  if (clocks->at_coarse_node() && scheme->started) change_clocks();
   node_impulses();
   open_steps();
   check_lists();
   advance(rule->node[rule->primary()] * h_step);
+}
+
+/* ----------------------------------------------------------------------
+   a dynamic fast group: atoms change clock at coarse nodes, where every
+   atom is at its node q^n with its node velocity v^n, which it keeps. Its
+   jump, whose smooth part is h a for steps h, is scaled to the new step;
+   then the interactions are split again, the atoms sorted by clock again,
+   and (Lobatto rules) the start-node forces of both subsets taken at q^n
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::change_clocks()
+{
+  std::vector<int> to_fine;
+  const bool changed = assign->follow(*split, to_fine);
+  if (changed) carry_jumps(to_fine);
+  if (changed || !split->up_to_date()) {
+    split->build();
+    assign->find_slow(*split);
+    if (assign->find_moving(*split, *clocks, free_flight())) comm->forward_comm();
+    first->find_partners(assign->participants(), assign->moving(), groupbit);
+  }
+  if (!changed) return;
+  if (rule->has_end_nodes()) {
+    store_start_node();
+    evals_total += 1.0;    // the two subsets once
+  }
+  guard->forget_stats();
+  slow_magnitudes();
+  scheme->forget_energies();
+  assign->label(*split);
+}
+
+/* ----------------------------------------------------------------------
+   [v] -> [v] h_new/h_old for the atoms that changed clock (to_fine[i] = 1:
+   to the fine clock, -1: to the coarse one), less the mass-weighted mean
+   of the change, so that sum m [v] (and with it the momentum of the
+   free-flight velocities) stays what it was; the node velocities, and
+   their momentum, are untouched
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::carry_jumps(const std::vector<int> &to_fine)
+{
+  double **jump = scheme->jump();
+  const double *rmass = atom->rmass;
+  const double *mass = atom->mass;
+  const int *type = atom->type;
+  const double K = clocks->steps();
+  double local[4] = {0.0, 0.0, 0.0, 0.0};    // sum m d[v], sum m
+  for (int i = 0; i < atom->nlocal; i++) {
+    if (!to_fine[i] || !(atom->mask[i] & groupbit)) continue;
+    const double m = rmass ? rmass[i] : mass[type[i]];
+    const double scale = (to_fine[i] > 0) ? 1.0 / K : K;
+    for (int k = 0; k < 3; k++) {
+      const double now = scale * jump[i][k];
+      local[k] += m * (now - jump[i][k]);
+      jump[i][k] = now;
+    }
+    local[3] += m;
+  }
+  double sum[4];
+  MPI_Allreduce(local, sum, 4, MPI_DOUBLE, MPI_SUM, world);
+  if (!(sum[3] > 0.0)) return;
+  for (int i = 0; i < atom->nlocal; i++) {
+    if (!to_fine[i] || !(atom->mask[i] & groupbit)) continue;
+    for (int k = 0; k < 3; k++) jump[i][k] -= sum[k] / sum[3];
+  }
 }
 
 /* ----------------------------------------------------------------------

@@ -25,6 +25,7 @@ FixStyle(pe_jump/async,FixPEJumpAsync);
 #include "pe_jump_options.h"
 
 #include <string>
+#include <vector>
 
 namespace LAMMPS_NS {
 namespace PEJump {
@@ -122,6 +123,8 @@ class FixPEJumpAsync : public Fix {
   void refuse_other_fixes() const;
   void check_clocks();
   void start_scheme(const char *, bool);
+  void change_clocks();    // a dynamic fast group, at coarse nodes
+  void carry_jumps(const std::vector<int> &to_fine);
   void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
   void continue_scheme();
   void node_impulses();

@@ -18,6 +18,7 @@
 #include "error.h"
 #include "fix.h"
 #include "group.h"
+#include "modify.h"
 #include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_interaction_split.h"
@@ -31,19 +32,32 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int 
                                  AtomState &table) :
     Pointers(lmp),
     fix(owner), state(table), fast_group(fast), layers(nlayers), finebit(0), clockbit(0),
-    saved_layers(-1), saved_clock{-1.0, -1.0}, reverse_flags(nullptr), counts{0.0, 0.0, 0.0}
+    dynamic(false), saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
+    reverse_flags(nullptr), counts{0.0, 0.0, 0.0}
 {
   const int ifast = group->find(fast_group);
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", fast_group);
-  finebit = clockbit = group->bitmask[ifast];    // with buffer layers: see find_groups()
+  finebit = clockbit = group->bitmask[ifast];    // own clock group: see find_groups()
+  dynamic = group->dynamic[ifast] != 0;
   KLASS = state.add("klass", 1, OUTSIDE);
+}
+
+/* ----------------------------------------------------------------------
+   with buffer layers, or a dynamic fast group (whose atoms change at any
+   step, while atoms change clock at coarse nodes only), the fine clock is
+   a group of the fix's own
+------------------------------------------------------------------------- */
+
+bool ClockAssignment::own_group() const
+{
+  return (layers > 0) || dynamic;
 }
 
 /* ---------------------------------------------------------------------- */
 
 void ClockAssignment::create_clock_group()
 {
-  if (layers > 0) group->find_or_create((std::string(fix->id) + "_fine_clock").c_str());
+  if (own_group()) group->find_or_create((std::string(fix->id) + "_fine_clock").c_str());
 }
 
 /* ----------------------------------------------------------------------
@@ -58,7 +72,12 @@ void ClockAssignment::find_groups()
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted", fast_group);
   finebit = group->bitmask[ifast];
   clockbit = finebit;
-  if (layers > 0) {
+  if ((group->dynamic[ifast] != 0) != dynamic)
+    error->all(FLERR,
+               "Fix pe_jump/async: its fast group {} was made {} after the fix was defined: "
+               "define the fix again (unfix, fix) after the group",
+               fast_group, dynamic ? "static" : "dynamic");
+  if (own_group()) {
     const std::string clock_group = std::string(fix->id) + "_fine_clock";
     const int iclock = group->find(clock_group);
     if (iclock < 0)
@@ -75,6 +94,9 @@ void ClockAssignment::find_groups()
     else
       ++local[1];
   }
+  // a dynamic group is brought up to date after init (and may be empty);
+  // its atoms outside the fix group stay on the coarse clock
+  if (dynamic) return;
   bigint global[2];
   MPI_Allreduce(local, global, 2, MPI_LMP_BIGINT, MPI_SUM, world);
   if (global[1] > 0)
@@ -95,17 +117,29 @@ void ClockAssignment::find_groups()
 
 bool ClockAssignment::assign_buffer(bool started, InteractionSplit &split)
 {
-  const bool redo = (layers > 0) && (!started || (layers != saved_layers));
+  const bool redo = own_group() && (!started || (layers != saved_layers));
   saved_layers = layers;
   if (!redo) return false;
+  assign(split);
+  return true;
+}
+
+/* ----------------------------------------------------------------------
+   the fine clock: the atoms of the fast group in the fix group, and the
+   buffer layers
+------------------------------------------------------------------------- */
+
+void ClockAssignment::assign(InteractionSplit &split)
+{
   int *mask = atom->mask;
-  const int nall = atom->nlocal + atom->nghost;
-  for (int i = 0; i < nall; i++) {
-    if (mask[i] & finebit)
+  for (int i = 0; i < atom->nlocal; i++) {
+    if ((mask[i] & finebit) && (mask[i] & fix->groupbit))
       mask[i] |= clockbit;
     else
       mask[i] &= ~clockbit;
   }
+  comm->forward_comm(fix);
+  fast_signature(fast_seen);
   // each layer adds the slow partners of the fine clock; stop early when a
   // layer adds no atom (everything reachable is on the fine clock)
   for (int layer = 0; layer < layers; layer++) {
@@ -123,7 +157,60 @@ bool ClockAssignment::assign_buffer(bool started, InteractionSplit &split)
     MPI_Allreduce(&added, &any, 1, MPI_INT, MPI_MAX, world);
     if (!any) break;
   }
-  return true;
+  // the layers split the interactions for the clocks of the layers before
+  split.invalidate();
+}
+
+/* ----------------------------------------------------------------------
+   at a coarse node: a dynamic fast group that changed since the last
+   assignment gives a new one; to_fine[i] (owned atoms) tells the atoms
+   that changed clock (1: to the fine clock, -1: to the coarse clock).
+   Returns true if any atom changed clock (global).
+------------------------------------------------------------------------- */
+
+bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine)
+{
+  if (!dynamic) return false;
+  // the group's criterion at the node positions: the group's own updates,
+  // in the middle of a step, see atoms between their nodes
+  Fix *criterion = modify->get_fix_by_id("GROUP_" + fast_group);
+  if (criterion) criterion->setup(0);
+  double now[2];
+  fast_signature(now);
+  if ((now[0] == fast_seen[0]) && (now[1] == fast_seen[1])) return false;
+
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  to_fine.assign(nlocal, 0);
+  for (int i = 0; i < nlocal; i++) to_fine[i] = (mask[i] & clockbit) ? 1 : 0;
+  assign(split);
+  int any = 0;
+  for (int i = 0; i < nlocal; i++) {
+    const int fine = (mask[i] & clockbit) ? 1 : 0;
+    to_fine[i] = fine - to_fine[i];
+    if (to_fine[i]) any = 1;
+  }
+  int global = 0;
+  MPI_Allreduce(&any, &global, 1, MPI_INT, MPI_MAX, world);
+  changed();    // the state of the atoms is carried over: it fits this fine clock
+  return global != 0;
+}
+
+/* ----------------------------------------------------------------------
+   the atoms of the fast group in the fix group: number, sum of IDs
+------------------------------------------------------------------------- */
+
+void ClockAssignment::fast_signature(double *sig) const
+{
+  double local[2] = {0.0, 0.0};
+  const int *mask = atom->mask;
+  const tagint *tag = atom->tag;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & finebit) && (mask[i] & fix->groupbit)) {
+      local[0] += 1.0;
+      local[1] += static_cast<double>(tag[i]);
+    }
+  MPI_Allreduce(local, sig, 2, MPI_DOUBLE, MPI_SUM, world);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -47,6 +47,13 @@ namespace PEJump {
     // at setup: (re)assign the buffer when the scheme starts or the layers
     // differ from those of the last run or restart file; true if done
     bool assign_buffer(bool started, InteractionSplit &);
+    // a dynamic fast group: at a coarse node, take its atoms (and the
+    // buffer) on the fine clock if it changed; to_fine[i] (owned atoms) is
+    // 1 for an atom that went to the fine clock, -1 to the coarse clock, 0
+    // else. True if any atom changed clock (global)
+    bool follow(InteractionSplit &, std::vector<int> &to_fine);
+    bool follows_group() const { return dynamic; }
+    const std::string &fast_group_name() const { return fast_group; }
     // true if the atoms on the fine clock changed since the last call (global)
     bool changed();
 
@@ -88,8 +95,10 @@ namespace PEJump {
     int KLASS;    // state field: the class
     std::string fast_group;
     int layers, finebit, clockbit;
+    bool dynamic;                       // the fast group is dynamic
     int saved_layers;                   // buffer layers of the last run (or restart file)
     double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
+    double fast_seen[2];                // fast group at the last assignment: number, sum of IDs
     std::vector<int> slow_flag;         // owned atoms: 1 if on the coarse clock
     std::vector<int> moving_flag;       // owned atoms: 1 if they move on fine steps
     std::vector<int> participant;       // owned and ghost atoms: in a fine interaction
@@ -97,6 +106,9 @@ namespace PEJump {
     std::vector<int> *reverse_flags;    // reverse communication carries these flags
     double counts[3];                   // global number of slow, mixed, fast atoms
     void gather(std::vector<int> &);    // flags set on ghosts are set on their owners
+    bool own_group() const;
+    void assign(InteractionSplit &);
+    void fast_signature(double *) const;
   };
 
 }    // namespace PEJump

@@ -880,3 +880,129 @@ TEST(PEJumpAsync, IncludeGroupRefusals)
   EXPECT_THAT(error_with("type 2", {async, "fix 3 all deform 1 x scale 1.01", "run 0"}),
               ContainsRegex("does not support a box that changes"));
 }
+
+/* ----------------------------------------------------------------------
+   dynamic fast groups: atoms change clock at coarse nodes only. A dynamic
+   group whose region does not move gives the static group's trajectory
+   (the region keeps a margin around the stiff band, which its atoms do
+   not cross, and covers the band's images across the periodic boundary)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, DynamicFastGroupEqualsStaticWhenItsRegionStays)
+{
+  const std::string band = "block INF INF 0 1.6 INF INF";
+  for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
+    std::vector<double> x[2];
+    for (const int dynamic : {0, 1}) {
+      Sim s;
+      bonded_lattice(s, band, 0.3);
+      s.cmds({"region low block INF INF -0.25 1.75 INF INF",
+              "region high block INF INF 6.75 INF INF INF", "region stays union 2 low high",
+              dynamic ? "group fast dynamic all region stays every 10" : "group fast region stays",
+              "fix 1 all pe_jump/async 10 fast" + rule, "thermo 50", "run 400"});
+      x[dynamic] = positions(s);
+      EXPECT_EQ(s.eval("count(fast)"), 48.0) << rule;
+      EXPECT_GT(s.vec("1", 8), 10.0) << rule;    // atoms of the class fast
+    }
+    EXPECT_EQ(max_diff(x[0], x[1]), 0.0) << rule;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   a fast region that moves over the lattice: atoms change clock at coarse
+   nodes, the total momentum stays what it was, and the atoms do change
+   clock (per-atom classes at the start and the end)
+------------------------------------------------------------------------- */
+
+namespace {
+
+// the lattice with soft bonds only, over which a fast region sweeps
+void moving_region(Sim &s, const std::string &rule)
+{
+  bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
+  s.cmds({"bond_coeff 2 1.0 1.0", "variable xc equal 2.0+0.02*step",
+          "region mov sphere v_xc 6.0621778 0 2.5 side in units box",
+          "group fast dynamic all region mov every 10", "fix 1 all pe_jump/async 10 fast" + rule,
+          "variable px equal mass(all)*vcm(all,x)", "variable py equal mass(all)*vcm(all,y)",
+          "thermo 10"});
+}
+
+// per atom ID: 1 if on the fine clock (class mixed or fast), serial runs
+std::vector<int> on_fine_clock(Sim &s)
+{
+  const auto *klass = s.lmp->modify->get_fix_by_id("1")->vector_atom;
+  std::vector<int> fine(s.lmp->atom->natoms + 1, 0);
+  for (int i = 0; i < s.lmp->atom->nlocal; i++)
+    fine[s.lmp->atom->tag[i]] = (klass[i] > 0.0) ? 1 : 0;
+  return fine;
+}
+
+}    // namespace
+
+TEST(PEJumpAsync, ClockChangesConserveMomentum)
+{
+  for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
+    Sim s;
+    moving_region(s, rule);
+    s.cmds({"run 0"});
+    const double p0[2] = {s.eval("v_px"), s.eval("v_py")};
+    const auto fine0 = on_fine_clock(s);
+    double worst = 0.0;
+    for (int block = 1; block <= 40; block++) {
+      s.cmd("run 10 post no");
+      worst =
+          std::max({worst, std::fabs(s.eval("v_px") - p0[0]), std::fabs(s.eval("v_py") - p0[1])});
+    }
+    const auto fine1 = on_fine_clock(s);
+    int joined = 0, left = 0;
+    for (size_t id = 1; id < fine0.size(); id++) {
+      joined += (!fine0[id] && fine1[id]) ? 1 : 0;
+      left += (fine0[id] && !fine1[id]) ? 1 : 0;
+    }
+    EXPECT_GT(joined, 10) << rule;
+    EXPECT_GT(left, 10) << rule;
+    EXPECT_LT(worst, 1e-13) << rule;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   a run continued from a restart file written at a coarse node, with the
+   region moving on, gives the unbroken run's trajectory: the fine clock
+   (a group of the fix) and the clocks' state are in the restart file
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, RestartAcrossClockChangesIsExact)
+{
+  for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
+    std::vector<double> unbroken, restarted;
+    double prd[3];
+    {
+      Sim s;
+      moving_region(s, rule);
+      s.cmds({"run 400"});
+      unbroken = positions(s);
+      for (int k = 0; k < 3; k++) prd[k] = s.lmp->domain->prd[k];
+    }
+    {
+      Sim s;
+      moving_region(s, rule);
+      s.cmds({"run 200", "write_restart pe_jump_dyn.restart", "clear",
+              "read_restart pe_jump_dyn.restart", "comm_modify cutoff 2.5", "neighbor 0.3 bin",
+              "neigh_modify every 1 delay 0 check yes", "fix 2d all enforce2d",
+              "variable xc equal 2.0+0.02*step",
+              "region mov sphere v_xc 6.0621778 0 2.5 side in units box",
+              "group fast dynamic all region mov every 10",
+              "fix 1 all pe_jump/async 10 fast" + rule, "run 200"});
+      restarted = positions(s);
+      std::remove("pe_jump_dyn.restart");
+    }
+    // (the restart wraps atoms back into the periodic box)
+    double worst = 0.0;
+    for (size_t n = 0; n < unbroken.size(); n++) {
+      const double box = prd[n % 3];
+      const double d = restarted[n] - unbroken[n];
+      worst = std::max(worst, std::fabs(d - box * std::round(d / box)));
+    }
+    EXPECT_LT(worst, 1e-13) << rule;    // the restart sorts the atoms: round-off
+  }
+}

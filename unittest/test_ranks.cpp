@@ -137,10 +137,16 @@ TEST(PEJumpRanks, BondedLatticeSameOn1And2And4Ranks)
   const double box = 6.0 * std::cbrt(1.0 / 0.5);
   const std::string core = "region core block 0 3 0 3 0 6 units lattice\n"
                            "group fast region core\n";
+  // a dynamic fast group whose region moves: atoms change clock at coarse nodes
+  const std::string moving = "variable xc equal 1.0+0.02*step\n"
+                             "region mov sphere v_xc 3 3 2 units lattice\n"
+                             "group fast dynamic all region mov every 5\n";
   check_ranks({"fix 1 all nve", "fix 1 all pe_jump quadrature lobatto 3",
                "newton off\nfix 1 all pe_jump quadrature legendre 3",
                core + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3",
-               "newton off\n" + core + "fix 1 all pe_jump/async 5 fast"},
+               "newton off\n" + core + "fix 1 all pe_jump/async 5 fast",
+               moving + "fix 1 all pe_jump/async 5 fast",
+               moving + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3 buffer 1"},
               true, 216, box);
 }
 
