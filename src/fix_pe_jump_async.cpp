@@ -299,13 +299,7 @@ void FixPEJumpAsync::note_velocity_changes(const AtomList *only)
 
 void FixPEJumpAsync::open_steps()
 {
-  double **v = atom->v;
-  double **jump = scheme->jump();
-  double *vsig = watch(OtherFixes::INSIDE_STEP) ? scheme->vsig() : nullptr;
-  for (const int i : assign->fast_atoms) {
-    for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
-    if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
-  }
+  scheme->open(group_atoms(&assign->fast_atoms), watch(OtherFixes::INSIDE_STEP));
 }
 
 /* ----------------------------------------------------------------------

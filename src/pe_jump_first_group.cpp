@@ -79,22 +79,30 @@ void FirstGroup::refuse_unsupported(const char *style) const
 
 /* ---------------------------------------------------------------------- */
 
+bigint FirstGroup::outside(int bits) const
+{
+  const int includebit = group->bitmask[neighbor->includegroup];
+  const int *mask = atom->mask;
+  bigint local = 0, all = 0;
+  for (int i = 0; i < atom->nlocal; i++)
+    if (((mask[i] & bits) == bits) && !(mask[i] & includebit)) ++local;
+  MPI_Allreduce(&local, &all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  return all;
+}
+
+/* ---------------------------------------------------------------------- */
+
 void FirstGroup::require_all(int groupbit, const char *style) const
 {
   if (!active()) return;
-  const int includebit = group->bitmask[neighbor->includegroup];
-  const int *mask = atom->mask;
-  bigint local = 0, outside = 0;
-  for (int i = 0; i < atom->nlocal; i++)
-    if ((mask[i] & groupbit) && !(mask[i] & includebit)) ++local;
-  MPI_Allreduce(&local, &outside, 1, MPI_LMP_BIGINT, MPI_SUM, world);
-  if (outside > 0)
+  const bigint count = outside(groupbit);
+  if (count > 0)
     error->all(FLERR,
                "Fix {} moves every atom of its group every step, but {} of them are not in the "
                "neigh_modify include group {}: LAMMPS would neither clear their forces nor "
                "check their distances. Remove neigh_modify include (and atom_modify first), or "
                "use fix pe_jump/async with the include group on the fine clock",
-               style, outside, group->names[neighbor->includegroup]);
+               style, count, group->names[neighbor->includegroup]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -102,20 +110,14 @@ void FirstGroup::require_all(int groupbit, const char *style) const
 void FirstGroup::require_fine_clock(int groupbit, int clockbit, bool buffer) const
 {
   if (!active()) return;
-  const int includebit = group->bitmask[neighbor->includegroup];
-  const int *mask = atom->mask;
-  bigint local = 0, outside = 0;
-  for (int i = 0; i < atom->nlocal; i++)
-    if ((mask[i] & groupbit) && (mask[i] & clockbit) && !(mask[i] & includebit)) ++local;
-  MPI_Allreduce(&local, &outside, 1, MPI_LMP_BIGINT, MPI_SUM, world);
-  if (outside > 0)
+  const bigint count = outside(groupbit | clockbit);
+  if (count > 0)
     error->all(FLERR,
                "Fix pe_jump/async: {} atoms on the fine clock (the fast group{}) are not in the "
                "neigh_modify include group {}: LAMMPS would neither clear their forces nor "
                "check their distances every step. Make the include group (and atom_modify "
                "first) contain the fast group{}, or remove neigh_modify include",
-               outside, buffer ? " and its buffer layers" : "",
-               group->names[neighbor->includegroup],
+               count, buffer ? " and its buffer layers" : "", group->names[neighbor->includegroup],
                buffer ? " and its buffer layers (e.g. a region around the fast group)" : "");
 }
 

@@ -149,13 +149,6 @@ void TwoStep::open(const AtomSet &set, bool fingerprint) const
 
 /* ---------------------------------------------------------------------- */
 
-void TwoStep::jump_atom(int i, double h, const double *favg, double *mag) const
-{
-  jump_one(2.0 * h * force->ftm2v * inverse_mass_of(i), favg, atom->v[i], jump()[i], mag);
-}
-
-/* ---------------------------------------------------------------------- */
-
 void TwoStep::jump_loop(const AtomSet &set, double **favg, const Loop &step, double *mag) const
 {
   double **x = atom->x;

@@ -71,11 +71,9 @@ namespace PEJump {
       return vnew;
     }
 
-    // atom i (atom->v its v^{n+1/2}) jumps with the quadrature sum favg of
-    // its forces over a step h; mag: the largest |v^{n+3/2}|^2 and
-    // |[v]^{n+1}|^2 so far
-    void jump_atom(int i, double h, const double *favg, double *mag) const;
-    // the same for an atom with velocity v and jump jmp, dtfm = 2 h ftm2v / m
+    // an atom (velocity v its v^{n+1/2}, jump jmp) jumps with the
+    // quadrature sum favg of its forces over a step h, dtfm = 2 h ftm2v / m;
+    // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
     static void jump_one(double dtfm, const double *favg, double *v, double *jmp, double *mag)
     {
       double vnew[3];
