@@ -44,9 +44,11 @@ import numpy as np
 SCENES = {
     # scene: (default runs in table order, reference run, energy scale)
     "crack": (["nve", "sync", "async", "async-band", "nve-coarse", "sync-coarse",
-               "nve-noshift", "async-noshift"], "ref", "E0"),
-    "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse"], "ref", "E0"),
-    "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse"], "ref", "Epka"),
+               "nve-noshift", "async-noshift", "async-dyn", "async-dyn-k10"], "ref", "E0"),
+    "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
+                "async-dyn-r8", "async-auto"], "ref", "E0"),
+    "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
+                 "async-auto", "async-auto-k10"], "ref", "Epka"),
 }
 
 
@@ -84,7 +86,9 @@ def parse_log(path):
         if line.startswith("ERROR"):
             scene = scene or line.strip()
     data = {c: np.array([r[i] for r in rows]) for i, c in enumerate(cols or [])}
-    return {"cols": data, "loop": loop, "steps": steps, "scene": scene, "epka": epka,
+    kasync = next((int(m.group(1)) for m in (re.search(r"pe_jump/async\s+(\d+)\s", l)
+                                               for l in lines) if m), None)
+    return {"cols": data, "loop": loop, "steps": steps, "scene": scene, "epka": epka, "K": kasync,
             "error": next((l.strip() for l in lines if l.startswith("ERROR")), None)}
 
 
@@ -175,7 +179,10 @@ def analyze_scene(scene, runs, ref_name, escale, date, out_md):
         L = logs[name]
         c = L["cols"]
         if L["loop"] is None or "v_E" not in c or len(c["v_E"]) == 0:
-            rows.append([name, "failed: " + (L["error"] or "no thermo")])
+            err = L["error"] or "no thermo"
+            m = re.search(r"at step (\d+): the momentum jumps grew (\S+)-fold", err)
+            rows.append([name, (f"failed: unstable at step {m.group(1)}, growth {m.group(2)}"
+                                if m else "failed: " + err[:100])])
             continue
         E = c["v_E"]
         if escale == "Epka":
@@ -222,6 +229,35 @@ def analyze_scene(scene, runs, ref_name, escale, date, out_md):
             cells += [f("vac", "%d"), f("inter", "%d"), f("off", "%d"), f("vac_not_ref", "%d")]
         lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
+    # dynamic fast groups: clock changes and the pseudo-energy (thermo columns
+    # f_clk[1], f_clk[2] = running means over the coarse nodes of the number
+    # of fine-clock atoms and of the atoms that changed clock)
+    clk = [n for n in runs if n in logs and "f_clk[1]" in logs[n]["cols"]
+           and len(logs[n]["cols"]["f_clk[1]"])]
+    if clk:
+        lines += [f"clock changes ({scene}; static async for comparison; 'end' = last thermo line,"
+                  " the step of the failure for unstable runs)", "",
+                  "| run | K | end step | fine-clock atoms / node | clock changes / node |"
+                  " max dE | max dH~ | dH~ at end | status |", "|---|---|---|---|---|---|---|---|---|"]
+        for name in ["async"] + clk:
+            if name not in logs:
+                continue
+            L = logs[name]
+            c = L["cols"]
+            E, Ht = c["v_E"], c.get("v_Ht", c["v_E"])
+            scale = L["epka"] if escale == "Epka" else abs(E[0])
+            nf = "%.1f" % c["f_clk[1]"][-1] if "f_clk[1]" in c else "%d" % int(c["v_nfast"][0])
+            ch = "%.2f" % c["f_clk[2]"][-1] if "f_clk[2]" in c else "0"
+            err = L["error"]
+            status = "ok"
+            if err:
+                m = re.search(r"at step (\d+): the momentum jumps grew (\S+)-fold", err)
+                status = (f"unstable at step {m.group(1)}, growth {m.group(2)}" if m
+                          else err.split(":", 1)[1].strip()[:60])
+            lines.append(f"| {name} | {L['K']} | {int(c['Step'][-1])} | {nf} | {ch} | "
+                         f"{np.abs(E - E[0]).max() / scale:.2e} | {np.abs(Ht - Ht[0]).max() / scale:.2e} | "
+                         f"{(Ht[-1] - Ht[0]) / scale:+.2e} | {status} |")
+        lines.append("")
     text = "\n".join(lines)
     print(text)
     out_md.write(text + "\n")
