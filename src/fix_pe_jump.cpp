@@ -570,6 +570,7 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
     return;
   }
   double vv = mag[0], jj = mag[1];
+  double **sampled = fsample();
   // per atom in registers (the arrays may alias for all the compiler knows)
   const auto one = [&](int i) {
     const double dtfm = kick * scheme->inverse_mass_of(i);
@@ -577,15 +578,15 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
     double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
     double vnew[3];
     for (int k = 0; k < 3; k++) {
-      if (centre_kick) vh[k] += 0.5 * dtfm * (f[i][k] - fsample()[i][k]);
+      if (centre_kick) vh[k] += 0.5 * dtfm * (f[i][k] - sampled[i][k]);
       x[i][k] += rest * vh[k];
       if (beta > 0.0) jmp[k] *= 1.0 - beta;
-      if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - fsample()[i][k]);
+      if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - sampled[i][k]);
       vnew[k] =
           PEJump::TwoStep::jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
       v[i][k] = vh[k];
       jump[i][k] = jmp[k];
-      if (keep_start) fstart[i][k] = fsample()[i][k];
+      if (keep_start) fstart[i][k] = sampled[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
@@ -781,12 +782,14 @@ void FixPEJump::quadrature_sum()
   if (split_primary() || reuse_start) primary_sampled_force();
 
   double **fp = split_primary() ? fsample() : atom->f;
+  double **sum = fsum();
+  const double w0 = rule->weight[0];
   for_atoms([&](int i) {
     if (reuse_start && std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
     for (int k = 0; k < 3; k++) {
-      fsum()[i][k] = wp * fp[i][k];
-      if (reuse_start) fsum()[i][k] += rule->weight[0] * fstart[i][k];
+      sum[i][k] = wp * fp[i][k];
+      if (reuse_start) sum[i][k] += w0 * fstart[i][k];
     }
   });
 
@@ -947,20 +950,6 @@ void FixPEJump::grow_work()
   const bool sum = (rule->size() > 1) || split_primary() || steps->keeps_history() || automatic;
   const bool sample = split_primary() || rule->has_end_nodes() || automatic;
   work->ensure(need, (sum ? 1 << SUM : 0) | (sample ? 1 << SAMPLE : 0));
-}
-
-/* ---------------------------------------------------------------------- */
-
-double **FixPEJump::fsum() const
-{
-  return work->get(SUM);
-}
-
-/* ---------------------------------------------------------------------- */
-
-double **FixPEJump::fsample() const
-{
-  return work->get(SAMPLE);
 }
 
 /* ----------------------------------------------------------------------

@@ -23,6 +23,7 @@ FixStyle(pe_jump,FixPEJump);
 #include "fix.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_options.h"
+#include "pe_jump_work_forces.h"
 
 #include <string>
 #include <vector>
@@ -38,7 +39,6 @@ namespace PEJump {
   class StabilityGuard;
   class StepControl;
   class TwoStep;
-  class WorkForces;
 }    // namespace PEJump
 
 class FixPEJump : public Fix {
@@ -105,8 +105,9 @@ class FixPEJump : public Fix {
   double evals_step, evals_total;    // force evaluations (units of full ones)
 
   enum { SUM, SAMPLE };
-  double **fsum() const;
-  double **fsample() const;
+  // (inline: the loops take them per atom)
+  double **fsum() const { return work->get(SUM); }
+  double **fsample() const { return work->get(SAMPLE); }
   void grow_work();
 
   PEJump::AtomSet group_atoms() const;
