@@ -500,27 +500,32 @@ void FixPEJumpAsync::change_clocks()
 }
 
 /* ----------------------------------------------------------------------
-   [v] -> [v] h_new/h_old for the atoms that changed clock (to_fine[i] = 1:
-   to the fine clock, -1: to the coarse one), less the mass-weighted mean
-   of the change, so that sum m [v] (and with it the momentum of the
-   free-flight velocities) stays what it was; the node velocities, and
-   their momentum, are untouched
+   the atoms that changed clock (to_fine[i] = 1: to the fine clock, -1: to
+   the coarse clock) start their new clock with the initial kick of the
+   scheme, [v]^n = h_new F(q^n)/m, from one evaluation of all forces at the
+   node (the smooth jump of the new step; whatever parasitic jump the old
+   clock carried is dropped), less the mass-weighted mean of the change,
+   so that sum m [v] stays what it was. Node velocities are untouched.
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::carry_jumps(const std::vector<int> &to_fine)
 {
+  NodeSampler::Keep keep(*nodes);
+  sampler->compute(ForceSampler::ALL, 0, 0);
+  evals_total += 1.0;
+  double **f = atom->f;
   double **jump = scheme->jump();
   const double *rmass = atom->rmass;
   const double *mass = atom->mass;
   const int *type = atom->type;
-  const double K = clocks->steps();
+  const double fine = update->dt * force->ftm2v, coarse = clocks->steps() * fine;
   double local[4] = {0.0, 0.0, 0.0, 0.0};    // sum m d[v], sum m
   for (int i = 0; i < atom->nlocal; i++) {
     if (!to_fine[i] || !(atom->mask[i] & groupbit)) continue;
     const double m = rmass ? rmass[i] : mass[type[i]];
-    const double scale = (to_fine[i] > 0) ? 1.0 / K : K;
+    const double dtfm = ((to_fine[i] > 0) ? fine : coarse) / m;
     for (int k = 0; k < 3; k++) {
-      const double now = scale * jump[i][k];
+      const double now = dtfm * f[i][k];
       local[k] += m * (now - jump[i][k]);
       jump[i][k] = now;
     }
