@@ -105,7 +105,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
   FACC = state->add("facc", 3, 0.0);
   FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
-  assign = new ClockAssignment(lmp, this, arg[4], opts.buffer_layers, *state);
+  assign = new ClockAssignment(lmp, this, arg[4], opts.buffer_layers, opts.fast_auto > 0.0, *state);
   clocks = new AsyncClocks(lmp, *state, nfine);
   split = new InteractionSplit(lmp, groupbit, assign->clock_bit());
   first = new FirstGroup(lmp);
@@ -185,8 +185,8 @@ void FixPEJumpAsync::init()
   first->refuse_unsupported(style);
   if (first->active() && assign->follows_group())
     error->all(FLERR,
-               "Fix pe_jump/async cannot follow the dynamic fast group {} with neigh_modify "
-               "include: atoms would change clock outside the include group",
+               "Fix pe_jump/async cannot follow the dynamic fast group {} (or fast auto) with "
+               "neigh_modify include: atoms would change clock outside the include group",
                assign->fast_group_name());
   split->start_run();
   assign->find_groups();
@@ -479,8 +479,9 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 
 void FixPEJumpAsync::change_clocks()
 {
-  std::vector<int> to_fine;
-  const bool changed = assign->follow(*split, to_fine);
+  std::vector<int> to_fine, chosen;
+  if (opts.fast_auto > 0.0) choose_fast(chosen);
+  const bool changed = assign->follow(*split, to_fine, chosen.empty() ? nullptr : &chosen);
   if (changed) carry_jumps(to_fine);
   if (changed || !split->up_to_date()) {
     split->build();
@@ -497,6 +498,38 @@ void FixPEJumpAsync::change_clocks()
   slow_magnitudes();
   scheme->forget_energies();
   assign->label(*split);
+}
+
+/* ----------------------------------------------------------------------
+   fast auto TOL: at a coarse node, the atoms of the fix group that would
+   move by more than TOL times the neighbor skin over a coarse step on the
+   coarse clock, h_S |v^n + (h_S/h) [v]^n/2| with h their present step (the
+   free flight of their next step with the jump fitted to the coarse
+   step), go on the fine clock; those on it stay while they would move by
+   more than half that (no flapping between the clocks)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::choose_fast(std::vector<int> &chosen) const
+{
+  const int nlocal = atom->nlocal;
+  const int *mask = atom->mask;
+  const int *slow = assign->slow();
+  double **v = atom->v;
+  double **jump = scheme->jump();
+  const double coarse = clocks->steps() * update->dt;
+  const double limit = opts.fast_auto * neighbor->skin;
+  chosen.assign(nlocal, 0);
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double ratio = slow[i] ? 1.0 : static_cast<double>(clocks->steps());
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+      const double u = v[i][k] + 0.5 * ratio * jump[i][k];
+      d2 += u * u;
+    }
+    const double d = coarse * sqrt(d2);
+    chosen[i] = (d > limit) || (!slow[i] && (d > 0.5 * limit));
+  }
 }
 
 /* ----------------------------------------------------------------------

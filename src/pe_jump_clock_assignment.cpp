@@ -29,10 +29,11 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int nlayers,
-                                 AtomState &table) :
+                                 bool chooses, AtomState &table) :
     Pointers(lmp),
     fix(owner), state(table), fast_group(fast), layers(nlayers), finebit(0), clockbit(0),
-    dynamic(false), saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
+    dynamic(false), automatic(chooses),
+    saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
     reverse_flags(nullptr), counts{0.0, 0.0, 0.0}
 {
   const int ifast = group->find(fast_group);
@@ -50,7 +51,7 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int 
 
 bool ClockAssignment::own_group() const
 {
-  return (layers > 0) || dynamic;
+  return (layers > 0) || dynamic || automatic;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -95,14 +96,15 @@ void ClockAssignment::find_groups()
       ++local[1];
   }
   // a dynamic group is brought up to date after init (and may be empty);
-  // its atoms outside the fix group stay on the coarse clock
+  // its atoms outside the fix group stay on the coarse clock. With fast
+  // auto the group may be empty too
   if (dynamic) return;
   bigint global[2];
   MPI_Allreduce(local, global, 2, MPI_LMP_BIGINT, MPI_SUM, world);
   if (global[1] > 0)
     error->all(FLERR, "Fix pe_jump/async: {} atoms of the fast group are not in the fix group {}",
                global[1], group->names[fix->igroup]);
-  if (global[0] == 0)
+  if ((global[0] == 0) && !automatic)
     error->all(FLERR, "Fix pe_jump/async: the fast group has no atoms in the fix group");
 }
 
@@ -129,17 +131,17 @@ bool ClockAssignment::assign_buffer(bool started, InteractionSplit &split)
    buffer layers
 ------------------------------------------------------------------------- */
 
-void ClockAssignment::assign(InteractionSplit &split)
+void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *chosen)
 {
   int *mask = atom->mask;
   for (int i = 0; i < atom->nlocal; i++) {
-    if ((mask[i] & finebit) && (mask[i] & fix->groupbit))
+    if (((mask[i] & finebit) || (chosen && (*chosen)[i])) && (mask[i] & fix->groupbit))
       mask[i] |= clockbit;
     else
       mask[i] &= ~clockbit;
   }
   comm->forward_comm(fix);
-  fast_signature(fast_seen);
+  fast_signature(fast_seen, chosen);
   // each layer adds the slow partners of the fine clock; stop early when a
   // layer adds no atom (everything reachable is on the fine clock)
   for (int layer = 0; layer < layers; layer++) {
@@ -168,22 +170,23 @@ void ClockAssignment::assign(InteractionSplit &split)
    Returns true if any atom changed clock (global).
 ------------------------------------------------------------------------- */
 
-bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine)
+bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
+                             const std::vector<int> *chosen)
 {
-  if (!dynamic) return false;
+  if (!dynamic && !automatic) return false;
   // the group's criterion at the node positions: the group's own updates,
   // in the middle of a step, see atoms between their nodes
-  Fix *criterion = modify->get_fix_by_id("GROUP_" + fast_group);
+  Fix *criterion = dynamic ? modify->get_fix_by_id("GROUP_" + fast_group) : nullptr;
   if (criterion) criterion->setup(0);
   double now[2];
-  fast_signature(now);
+  fast_signature(now, chosen);
   if ((now[0] == fast_seen[0]) && (now[1] == fast_seen[1])) return false;
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   to_fine.assign(nlocal, 0);
   for (int i = 0; i < nlocal; i++) to_fine[i] = (mask[i] & clockbit) ? 1 : 0;
-  assign(split);
+  assign(split, chosen);
   int any = 0;
   for (int i = 0; i < nlocal; i++) {
     const int fine = (mask[i] & clockbit) ? 1 : 0;
@@ -200,13 +203,13 @@ bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine)
    the atoms of the fast group in the fix group: number, sum of IDs
 ------------------------------------------------------------------------- */
 
-void ClockAssignment::fast_signature(double *sig) const
+void ClockAssignment::fast_signature(double *sig, const std::vector<int> *chosen) const
 {
   double local[2] = {0.0, 0.0};
   const int *mask = atom->mask;
   const tagint *tag = atom->tag;
   for (int i = 0; i < atom->nlocal; i++)
-    if ((mask[i] & finebit) && (mask[i] & fix->groupbit)) {
+    if (((mask[i] & finebit) || (chosen && (*chosen)[i])) && (mask[i] & fix->groupbit)) {
       local[0] += 1.0;
       local[1] += static_cast<double>(tag[i]);
     }

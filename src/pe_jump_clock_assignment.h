@@ -38,7 +38,9 @@ namespace PEJump {
    public:
     enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
 
-    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, int layers, AtomState &);
+    // automatic: the fix adds atoms of its own choice to the fast group
+    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, int layers, bool automatic,
+                    AtomState &);
 
     void create_clock_group();    // after the fix exists (buffer layers only)
     void find_groups();           // at init: the group bits, again (groups may be deleted)
@@ -47,12 +49,13 @@ namespace PEJump {
     // at setup: (re)assign the buffer when the scheme starts or the layers
     // differ from those of the last run or restart file; true if done
     bool assign_buffer(bool started, InteractionSplit &);
-    // a dynamic fast group: at a coarse node, take its atoms (and the
-    // buffer) on the fine clock if it changed; to_fine[i] (owned atoms) is
-    // 1 for an atom that went to the fine clock, -1 to the coarse clock, 0
-    // else. True if any atom changed clock (global)
-    bool follow(InteractionSplit &, std::vector<int> &to_fine);
-    bool follows_group() const { return dynamic; }
+    // a dynamic fast group, or atoms chosen by the fix (chosen[i] = 1,
+    // owned atoms; nullptr: none): at a coarse node, take them (and the
+    // buffer) on the fine clock if they changed; to_fine[i] (owned atoms)
+    // is 1 for an atom that went to the fine clock, -1 to the coarse
+    // clock, 0 else. True if any atom changed clock (global)
+    bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
+    bool follows_group() const { return dynamic || automatic; }
     const std::string &fast_group_name() const { return fast_group; }
     // true if the atoms on the fine clock changed since the last call (global)
     bool changed();
@@ -96,6 +99,7 @@ namespace PEJump {
     std::string fast_group;
     int layers, finebit, clockbit;
     bool dynamic;                       // the fast group is dynamic
+    bool automatic;                     // the fix adds atoms to the fast group
     int saved_layers;                   // buffer layers of the last run (or restart file)
     double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
     double fast_seen[2];                // fast group at the last assignment: number, sum of IDs
@@ -107,8 +111,8 @@ namespace PEJump {
     double counts[3];                   // global number of slow, mixed, fast atoms
     void gather(std::vector<int> &);    // flags set on ghosts are set on their owners
     bool own_group() const;
-    void assign(InteractionSplit &);
-    void fast_signature(double *) const;
+    void assign(InteractionSplit &, const std::vector<int> *chosen = nullptr);
+    void fast_signature(double *, const std::vector<int> *chosen) const;
   };
 
 }    // namespace PEJump

@@ -30,7 +30,7 @@ using namespace LAMMPS_NS::PEJump;
 Options::Options() :
     family(Quadrature::LEGENDRE), npoints(1), init_style(KICK), sample_mask(ForceSampler::ALL),
     auto_tol(0.0), adapt_eps(0.0), adapt_dtmin(0.0), adapt_dtmax(0.0), compensate(-1),
-    damp_time(-1.0), buffer_layers(0)
+    damp_time(-1.0), buffer_layers(0), fast_auto(0.0)
 {
 }
 
@@ -71,6 +71,21 @@ void Options::parse(LAMMPS *lmp, const char *style, int narg, char **arg, int fi
       buffer_layers = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
       if (buffer_layers < 0) lmp->error->all(FLERR, "Fix {} buffer needs N >= 0", style);
       iarg += 2;
+    } else if (strcmp(arg[iarg], "fast") == 0) {
+      if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " fast", lmp->error);
+      if (!two_clocks)
+        lmp->error->all(FLERR,
+                        "Fix {} has a single clock: the fast keyword belongs to fix pe_jump/async",
+                        style);
+      if (strcmp(arg[iarg + 1], "auto") != 0)
+        lmp->error->all(FLERR, "Fix {} fast takes auto TOL, got {}", style, arg[iarg + 1]);
+      fast_auto = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
+      if (!(fast_auto > 0.0) || (fast_auto > 0.5))
+        lmp->error->all(FLERR,
+                        "Fix {} fast auto needs 0 < TOL <= 0.5 (a fraction of the neighbor skin), "
+                        "got {}",
+                        style, arg[iarg + 2]);
+      iarg += 3;
     } else if (strcmp(arg[iarg], "damp") == 0) {
       if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " damp", lmp->error);
       if (strcmp(arg[iarg + 1], "auto") == 0) {

@@ -33,6 +33,7 @@ namespace PEJump {
     int compensate;                                // -1: on with adapt
     double damp_time;                              // -1: auto
     int buffer_layers;                             // pe_jump/async only
+    double fast_auto;    // pe_jump/async fast auto: fraction of the skin, 0 if off
 
     Options();
 

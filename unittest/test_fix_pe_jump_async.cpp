@@ -1006,3 +1006,34 @@ TEST(PEJumpAsync, RestartAcrossClockChangesIsExact)
     EXPECT_LT(worst, 1e-13) << rule;    // the restart sorts the atoms: round-off
   }
 }
+
+/* ----------------------------------------------------------------------
+   fast auto TOL: an atom shot through a lattice of soft bonds at rest goes
+   on the fine clock by itself (the fast group is empty); the choice stays
+   local, and the momentum stays exact
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, FastAutoTakesAHotAtomOnTheFineClock)
+{
+  for (const std::string rule : {"", " quadrature lobatto 3"}) {
+    Sim s;
+    bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.5);
+    s.cmds({"bond_coeff 2 1.0 1.0", "group fast id 100000", "velocity all set 0 0 0",
+            "group hot id 90", "velocity hot set 2.0 1.0 0.0",
+            "fix 1 all pe_jump/async 10 fast fast auto 0.1" + rule,
+            "variable px equal mass(all)*vcm(all,x)", "variable py equal mass(all)*vcm(all,y)",
+            "run 0"});
+    const double p0[2] = {s.eval("v_px"), s.eval("v_py")};
+    double worst = 0.0, most = 0.0;
+    for (int block = 1; block <= 20; block++) {
+      s.cmd("run 10 post no");
+      worst =
+          std::max({worst, std::fabs(s.eval("v_px") - p0[0]), std::fabs(s.eval("v_py") - p0[1])});
+      most = std::max(most, s.vec("1", 7) + s.vec("1", 8));
+      if (block == 1) EXPECT_EQ(on_fine_clock(s)[90], 1) << rule;
+    }
+    EXPECT_GE(most, 1.0) << rule;
+    EXPECT_LT(most, 40.0) << rule;    // of 168: the choice is local
+    EXPECT_LT(worst, 1e-13) << rule;
+  }
+}
