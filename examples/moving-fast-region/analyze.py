@@ -44,11 +44,11 @@ import numpy as np
 SCENES = {
     # scene: (default runs in table order, reference run, energy scale)
     "crack": (["nve", "sync", "async", "async-band", "nve-coarse", "sync-coarse",
-               "nve-noshift", "async-noshift", "async-dyn", "async-dyn-k10"], "ref", "E0"),
+               "nve-noshift", "async-noshift", "async-dyn", "async-dyn-k5"], "ref", "E0"),
     "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
-                "async-dyn-r8", "async-auto"], "ref", "E0"),
+                "async-dyn-r12", "async-auto"], "ref", "E0"),
     "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
-                 "async-auto", "async-auto-k10"], "ref", "Epka"),
+                 "async-auto", "async-auto-k2"], "ref", "Epka"),
 }
 
 
