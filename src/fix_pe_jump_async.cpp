@@ -72,8 +72,8 @@ using PEJump::StabilityGuard;
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
-    assign(nullptr), work(nullptr), first(nullptr), reinit_pending(0), eflag_step(0), vflag_step(0),
-    h_step(0.0), evals_step(0.0), evals_total(0.0), changes_seen(0)
+    assign(nullptr), classes(nullptr), work(nullptr), first(nullptr), reinit_pending(0),
+    eflag_step(0), vflag_step(0), h_step(0.0), evals_step(0.0), evals_total(0.0), changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -105,7 +105,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
   FACC = state->add("facc", 3, 0.0);
   FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
-  assign = new ClockAssignment(lmp, this, arg[4], opts.buffer_layers, opts.fast_auto > 0.0, *state);
+  assign = new ClockAssignment(lmp, this, arg[4], opts.buffer_layers, opts.fast_auto > 0.0);
+  classes = new PEJump::ClockClasses(lmp, *state);
   clocks = new AsyncClocks(lmp, *state, nfine);
   split = new InteractionSplit(lmp, groupbit, assign->clock_bit());
   first = new FirstGroup(lmp);
@@ -156,6 +157,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
   delete first;
   delete split;
   delete clocks;
+  delete classes;
   delete assign;
   delete scheme;
   delete state;
@@ -423,7 +425,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
-  assign->label(*split);
+  classes->label(*split, *assign, groupbit);
 }
 
 /* ----------------------------------------------------------------------
@@ -497,7 +499,7 @@ void FixPEJumpAsync::change_clocks()
   guard->forget_stats();
   slow_magnitudes();
   scheme->forget_energies();
-  assign->label(*split);
+  classes->label(*split, *assign, groupbit);
 }
 
 /* ----------------------------------------------------------------------
@@ -867,7 +869,8 @@ void FixPEJumpAsync::final_integrate()
 
   // the labels are output only: take them where something looks, when
   // tally_at_node() has brought the ghosts to the node
-  if (coarse_end && (eflag_step || vflag_step || others->step_observed())) assign->label(*split);
+  if (coarse_end && (eflag_step || vflag_step || others->step_observed()))
+    classes->label(*split, *assign, groupbit);
 }
 
 /* ----------------------------------------------------------------------
@@ -1007,7 +1010,7 @@ double FixPEJumpAsync::compute_vector(int n)
     case 6:
     case 7:
     case 8:
-      return assign->count(n - 6);
+      return classes->count(n - 6);
   }
   return 0.0;
 }
@@ -1019,7 +1022,7 @@ double FixPEJumpAsync::compute_vector(int n)
 
 void FixPEJumpAsync::show_classes()
 {
-  vector_atom = assign->classes();
+  vector_atom = classes->classes();
 }
 
 /* ----------------------------------------------------------------------

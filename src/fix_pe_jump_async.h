@@ -32,6 +32,7 @@ namespace PEJump {
   class AsyncClocks;
   class AtomState;
   class ClockAssignment;
+  class ClockClasses;
   class FirstGroup;
   class ForceSampler;
   class InteractionSplit;
@@ -99,6 +100,7 @@ class FixPEJumpAsync : public Fix {
   PEJump::InteractionSplit *split;
   PEJump::AsyncClocks *clocks;
   PEJump::ClockAssignment *assign;
+  PEJump::ClockClasses *classes;
   PEJump::WorkForces *work;     // SUM: fine quadrature sum, SAMPLE: primary force, COARSE
   PEJump::FirstGroup *first;    // the opt-in atom_modify first + neigh_modify include
 

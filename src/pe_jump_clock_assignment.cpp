@@ -29,18 +29,16 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int nlayers,
-                                 bool chooses, AtomState &table) :
+                                 bool chooses) :
     Pointers(lmp),
-    fix(owner), state(table), fast_group(fast), layers(nlayers), finebit(0), clockbit(0),
-    dynamic(false), automatic(chooses),
-    saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
-    reverse_flags(nullptr), counts{0.0, 0.0, 0.0}
+    fix(owner), fast_group(fast), layers(nlayers), finebit(0), clockbit(0), dynamic(false),
+    automatic(chooses), saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
+    reverse_flags(nullptr)
 {
   const int ifast = group->find(fast_group);
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", fast_group);
   finebit = clockbit = group->bitmask[ifast];    // own clock group: see find_groups()
   dynamic = group->dynamic[ifast] != 0;
-  KLASS = state.add("klass", 1, OUTSIDE);
 }
 
 /* ----------------------------------------------------------------------
@@ -288,39 +286,6 @@ bool ClockAssignment::find_moving(const InteractionSplit &split, AsyncClocks &cl
   return any != 0;
 }
 
-/* ----------------------------------------------------------------------
-   slow = on the coarse clock; mixed = fine-clock atom that shares an
-   interaction with a slow atom; fast = the other fine-clock atoms
-------------------------------------------------------------------------- */
-
-void ClockAssignment::label(const InteractionSplit &split)
-{
-  split.mark_interface(interface_flag);
-  gather(interface_flag);
-
-  const int *mask = atom->mask;
-  const int nlocal = atom->nlocal;
-  double *klass = state.val(KLASS);
-  double local[3] = {0.0, 0.0, 0.0};
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & fix->groupbit))
-      klass[i] = OUTSIDE;
-    else if (split.coarse(i))
-      klass[i] = SLOW;
-    else
-      klass[i] = interface_flag[i] ? MIXED : FAST;
-    if (klass[i] != OUTSIDE) local[static_cast<int>(klass[i])] += 1.0;
-  }
-  MPI_Allreduce(local, counts, 3, MPI_DOUBLE, MPI_SUM, world);
-}
-
-/* ---------------------------------------------------------------------- */
-
-double *ClockAssignment::classes() const
-{
-  return state.val(KLASS);
-}
-
 /* ---------------------------------------------------------------------- */
 
 void ClockAssignment::save(double *list) const
@@ -384,4 +349,45 @@ void ClockAssignment::unpack_reverse(int n, const int *list, const double *buf)
 {
   for (int i = 0; i < n; i++)
     if (buf[i] != 0.0) (*reverse_flags)[list[i]] = 1;
+}
+
+/* ---------------------------------------------------------------------- */
+
+ClockClasses::ClockClasses(LAMMPS *lmp, AtomState &table) :
+    Pointers(lmp), state(table), counts{0.0, 0.0, 0.0}
+{
+  KLASS = state.add("klass", 1, OUTSIDE);
+}
+
+/* ----------------------------------------------------------------------
+   slow = on the coarse clock; mixed = fine-clock atom that shares an
+   interaction with a slow atom; fast = the other fine-clock atoms
+------------------------------------------------------------------------- */
+
+void ClockClasses::label(const InteractionSplit &split, ClockAssignment &assign, int groupbit)
+{
+  split.mark_interface(interface_flag);
+  assign.gather(interface_flag);
+
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  double *klass = state.val(KLASS);
+  double local[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit))
+      klass[i] = OUTSIDE;
+    else if (split.coarse(i))
+      klass[i] = SLOW;
+    else
+      klass[i] = interface_flag[i] ? MIXED : FAST;
+    if (klass[i] != OUTSIDE) local[static_cast<int>(klass[i])] += 1.0;
+  }
+  MPI_Allreduce(local, counts, 3, MPI_DOUBLE, MPI_SUM, world);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double *ClockClasses::classes() const
+{
+  return state.val(KLASS);
 }

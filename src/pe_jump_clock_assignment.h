@@ -31,16 +31,12 @@ namespace PEJump {
   // fix creates and which moves with the atoms and into restart files.
   // After every list build the split interactions give the lists of the
   // atoms that are slow, and of those that move on fine steps (on the fine
-  // clock, or slow in a fine interaction); at coarse nodes the classes
-  // slow / mixed / fast (per-atom output, a field of the state table).
+  // clock, or slow in a fine interaction).
 
   class ClockAssignment : protected Pointers {
    public:
-    enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
-
     // automatic: the fix adds atoms of its own choice to the fast group
-    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, int layers, bool automatic,
-                    AtomState &);
+    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, int layers, bool automatic);
 
     void create_clock_group();    // after the fix exists (buffer layers only)
     void find_groups();           // at init: the group bits, again (groups may be deleted)
@@ -73,12 +69,6 @@ namespace PEJump {
     AtomList slow_moving;     // and the slow ones in a fine interaction
     AtomList slow_atoms;      // the atoms of the group on the coarse clock
 
-    // at a coarse node, with the ghosts at the node: the classes and their
-    // global numbers
-    void label(const InteractionSplit &);
-    double count(int which) const { return counts[which]; }
-    double *classes() const;
-
     // restart: buffer layers and fine-clock atoms (number, sum of IDs) of
     // the last run (3 values)
     void save(double *list) const;
@@ -87,6 +77,7 @@ namespace PEJump {
     // communication of the clock bit of the ghosts (forward) and of flags
     // set on ghosts (reverse): the fix passes its calls on
     bool reversing() const { return reverse_flags != nullptr; }
+    void gather(std::vector<int> &);    // flags set on ghosts are set on their owners
     int pack_forward(int n, const int *list, double *buf) const;
     void unpack_forward(int n, int first, const double *buf);
     int pack_reverse(int n, int first, double *buf) const;
@@ -94,8 +85,6 @@ namespace PEJump {
 
    private:
     Fix *fix;
-    AtomState &state;
-    int KLASS;    // state field: the class
     std::string fast_group;
     int layers, finebit, clockbit;
     bool dynamic;                       // the fast group is dynamic
@@ -106,13 +95,32 @@ namespace PEJump {
     std::vector<int> slow_flag;         // owned atoms: 1 if on the coarse clock
     std::vector<int> moving_flag;       // owned atoms: 1 if they move on fine steps
     std::vector<int> participant;       // owned and ghost atoms: in a fine interaction
-    std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
     std::vector<int> *reverse_flags;    // reverse communication carries these flags
-    double counts[3];                   // global number of slow, mixed, fast atoms
-    void gather(std::vector<int> &);    // flags set on ghosts are set on their owners
     bool own_group() const;
     void assign(InteractionSplit &, const std::vector<int> *chosen = nullptr);
     void fast_signature(double *, const std::vector<int> *chosen) const;
+  };
+
+  // The classes of the atoms of pe_jump/async at coarse nodes, for output
+  // (a field of the state table, the fix's per-atom vector): slow = on the
+  // coarse clock; mixed = on the fine clock and sharing an interaction
+  // with a slow atom; fast = the other fine-clock atoms; and their numbers
+
+  class ClockClasses : protected Pointers {
+   public:
+    enum Class { OUTSIDE = -1, SLOW = 0, MIXED = 1, FAST = 2 };
+
+    ClockClasses(class LAMMPS *, AtomState &);
+    // with the ghosts at the node (collective)
+    void label(const InteractionSplit &, ClockAssignment &, int groupbit);
+    double count(int which) const { return counts[which]; }
+    double *classes() const;
+
+   private:
+    AtomState &state;
+    int KLASS;                          // state field: the class
+    std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
+    double counts[3];                   // global number of slow, mixed, fast atoms
   };
 
 }    // namespace PEJump

@@ -62,30 +62,12 @@ void Options::parse(LAMMPS *lmp, const char *style, int narg, char **arg, int fi
       if ((adapt_dtmin <= 0.0) || (adapt_dtmax < adapt_dtmin))
         lmp->error->all(FLERR, "Fix {} adapt needs 0 < dtmin <= dtmax", style);
       iarg += 4;
-    } else if (strcmp(arg[iarg], "buffer") == 0) {
-      if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " buffer", lmp->error);
-      if (!two_clocks)
-        lmp->error->all(
-            FLERR, "Fix {} has a single clock: the buffer keyword belongs to fix pe_jump/async",
-            style);
-      buffer_layers = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
-      if (buffer_layers < 0) lmp->error->all(FLERR, "Fix {} buffer needs N >= 0", style);
-      iarg += 2;
-    } else if (strcmp(arg[iarg], "fast") == 0) {
-      if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " fast", lmp->error);
+    } else if ((strcmp(arg[iarg], "buffer") == 0) || (strcmp(arg[iarg], "fast") == 0)) {
       if (!two_clocks)
         lmp->error->all(FLERR,
-                        "Fix {} has a single clock: the fast keyword belongs to fix pe_jump/async",
-                        style);
-      if (strcmp(arg[iarg + 1], "auto") != 0)
-        lmp->error->all(FLERR, "Fix {} fast takes auto TOL, got {}", style, arg[iarg + 1]);
-      fast_auto = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
-      if (!(fast_auto > 0.0) || (fast_auto > 0.5))
-        lmp->error->all(FLERR,
-                        "Fix {} fast auto needs 0 < TOL <= 0.5 (a fraction of the neighbor skin), "
-                        "got {}",
-                        style, arg[iarg + 2]);
-      iarg += 3;
+                        "Fix {} has a single clock: the {} keyword belongs to fix pe_jump/async",
+                        style, arg[iarg]);
+      iarg = clock_keyword(lmp, style, narg, arg, iarg);
     } else if (strcmp(arg[iarg], "damp") == 0) {
       if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " damp", lmp->error);
       if (strcmp(arg[iarg + 1], "auto") == 0) {
@@ -164,4 +146,29 @@ int Options::sample(LAMMPS *lmp, const char *style, int narg, char **arg, int ia
                     "kspace, or all",
                     style);
   return iarg;
+}
+
+/* ----------------------------------------------------------------------
+   the keywords of the clocks of pe_jump/async (buffer, fast) at arg[iarg]:
+   returns the index after them
+------------------------------------------------------------------------- */
+
+int Options::clock_keyword(LAMMPS *lmp, const char *style, int narg, char **arg, int iarg)
+{
+  const std::string fix = std::string("fix ") + style;
+  if (strcmp(arg[iarg], "buffer") == 0) {
+    if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " buffer", lmp->error);
+    buffer_layers = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
+    if (buffer_layers < 0) lmp->error->all(FLERR, "Fix {} buffer needs N >= 0", style);
+    return iarg + 2;
+  }
+  if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " fast", lmp->error);
+  if (strcmp(arg[iarg + 1], "auto") != 0)
+    lmp->error->all(FLERR, "Fix {} fast takes auto TOL, got {}", style, arg[iarg + 1]);
+  fast_auto = utils::numeric(FLERR, arg[iarg + 2], false, lmp);
+  if (!(fast_auto > 0.0) || (fast_auto > 0.5))
+    lmp->error->all(
+        FLERR, "Fix {} fast auto needs 0 < TOL <= 0.5 (a fraction of the neighbor skin), got {}",
+        style, arg[iarg + 2]);
+  return iarg + 3;
 }

@@ -44,6 +44,7 @@ namespace PEJump {
    private:
     int quadrature(LAMMPS *, const char *style, int narg, char **arg, int iarg);
     int sample(LAMMPS *, const char *style, int narg, char **arg, int iarg);
+    int clock_keyword(LAMMPS *, const char *style, int narg, char **arg, int iarg);
   };
 
 }    // namespace PEJump
