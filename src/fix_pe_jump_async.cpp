@@ -81,19 +81,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   if (nfine < 1) error->all(FLERR, "Fix pe_jump/async needs K >= 1 fine steps per coarse step");
   if (group->find(arg[4]) < 0)
     error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
-  if (opts.adapt_eps > 0.0)
-    error->all(FLERR,
-               "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
-               "steps are fixed (use fix pe_jump for adaptive steps)");
-  if (opts.auto_tol > 0.0)
-    error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
-  if (opts.compensate > 0)
-    error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
-  if (opts.damp_time >= 0.0)
-    error->all(FLERR, "Fix pe_jump/async does not support the damp keyword yet");
-  if (opts.sample_mask != ForceSampler::ALL)
-    error->all(FLERR,
-               "Fix pe_jump/async samples all force contributions: remove the sample keyword");
+  refuse_keywords();
 
   rule = new Quadrature(static_cast<Quadrature::Family>(opts.family), opts.npoints);
   sampler = new ForceSampler(lmp);
@@ -133,6 +121,27 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   for (int i = 0; i < atom->nlocal; i++) FixPEJumpAsync::set_arrays(i);
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
+}
+
+/* ----------------------------------------------------------------------
+   keywords of fix pe_jump that the fixed steps of the two clocks exclude
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::refuse_keywords() const
+{
+  if (opts.adapt_eps > 0.0)
+    error->all(FLERR,
+               "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
+               "steps are fixed (use fix pe_jump for adaptive steps)");
+  if (opts.auto_tol > 0.0)
+    error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
+  if (opts.compensate > 0)
+    error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
+  if (opts.damp_time >= 0.0)
+    error->all(FLERR, "Fix pe_jump/async does not support the damp keyword yet");
+  if (opts.sample_mask != ForceSampler::ALL)
+    error->all(FLERR,
+               "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 }
 
 /* ----------------------------------------------------------------------

@@ -121,6 +121,7 @@ class FixPEJumpAsync : public Fix {
   bool watch(int when) const;    // other fixes may change velocities then (OtherFixes hooks)
   PEJump::FreeFlight free_flight() const;    // fine-clock atoms inside their fine step
 
+  void refuse_keywords() const;
   void refuse_unsplittable() const;
   void refuse_other_fixes() const;
   void check_clocks();
