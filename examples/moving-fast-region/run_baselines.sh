@@ -60,3 +60,6 @@ run cascade async-dyn     -var integrator async -var K 10 -var fast dynamic -var
 run cascade async-auto    -var integrator async -var K 10 -var fast auto -var kthr 2.0 -var every 10
 run crack async-dyn-k5    -var integrator async -var K 5  -var fast dynamic -var R 10.0 -var every 10
 run cascade async-auto-k2 -var integrator async -var K 2  -var fast auto -var kthr 2.0 -var every 10
+# fast auto TOL (keyword of fix pe_jump/async): the fix chooses the fine-clock atoms
+run impact async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
+run cascade async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
