@@ -66,8 +66,11 @@ int InteractionSplit::coarse(int i) const
 
 int InteractionSplit::klass(const int *atoms, int n) const
 {
-  for (int k = 0; k < n; k++)
-    if (fine(atoms[k])) return FINE;
+  const int *mask = atom->mask;
+  for (int k = 0; k < n; k++) {
+    const int m = mask[atoms[k]];
+    if ((m & groupbit) && (m & finebit)) return FINE;
+  }
   return COARSE;
 }
 
@@ -168,17 +171,24 @@ void InteractionSplit::split_pairs(PairList &p)
     part.neigh.clear();
   }
 
+  // per atom (owned and ghost) 1 if on the fine clock, 2 if on the coarse
+  // clock, 0 if not integrated: a pair is FINE if either atom is fine
+  const int *mask = atom->mask;
+  clock_of.resize(nall);
+  for (int i = 0; i < nall; i++)
+    clock_of[i] = !(mask[i] & groupbit) ? 0 : ((mask[i] & finebit) ? 1 : 2);
+  const int *clock = clock_of.data();
+  const auto pair_class = [clock](int i, int j) {
+    return ((clock[i] == 1) || (clock[j] == 1)) ? FINE : COARSE;
+  };
+
   // first pass: sizes, so that the neighbor storage is not reallocated later
 
   size_t total[2] = {0, 0};
   for (int ii = 0; ii < inum; ii++) {
     const int i = ilist[ii];
     const int *jlist = list->firstneigh[i];
-    for (int jj = 0; jj < list->numneigh[i]; jj++) {
-      const int j = jlist[jj] & NEIGHMASK;
-      const int atoms[2] = {i, j};
-      ++total[klass(atoms, 2)];
-    }
+    for (int jj = 0; jj < list->numneigh[i]; jj++) ++total[pair_class(i, jlist[jj] & NEIGHMASK)];
   }
   for (int s = 0; s < 2; s++) p.part[s].neigh.reserve(total[s]);
 
@@ -188,10 +198,9 @@ void InteractionSplit::split_pairs(PairList &p)
     size_t start[2] = {p.part[FINE].neigh.size(), p.part[COARSE].neigh.size()};
     for (int jj = 0; jj < list->numneigh[i]; jj++) {
       const int j = jlist[jj] & NEIGHMASK;
-      const int atoms[2] = {i, j};
-      const int s = klass(atoms, 2);
+      const int s = pair_class(i, j);
       p.part[s].neigh.push_back(jlist[jj]);
-      if ((s == FINE) && (coarse(i) || coarse(j))) {
+      if ((s == FINE) && ((clock[i] == 2) || (clock[j] == 2))) {
         cross.push_back(i);
         cross.push_back(j);
       }

@@ -111,7 +111,8 @@ namespace PEJump {
       PairSubset part[2];
     };
     std::vector<PairList> pairs;
-    std::vector<int> cross;    // pairs (i,j) of a fine and a coarse atom
+    std::vector<int> cross;       // pairs (i,j) of a fine and a coarse atom
+    std::vector<int> clock_of;    // work: per atom 1 fine clock, 2 coarse clock, 0 neither
 
     // one topology list (bonds, angles, ...) of the neighbor class, whose
     // entries are reordered in place: the FINE ones first, then the COARSE
