@@ -48,7 +48,8 @@ SCENES = {
     "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
                 "async-dyn-r12", "async-auto", "async-fastauto"], "ref", "E0"),
     "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
-                 "async-auto", "async-auto-k2", "async-fastauto"], "ref", "Epka"),
+                 "async-auto", "async-auto-k2", "async-fastauto",
+                 "async-fastauto-b1"], "ref", "Epka"),
 }
 
 

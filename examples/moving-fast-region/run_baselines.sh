@@ -63,3 +63,4 @@ run cascade async-auto-k2 -var integrator async -var K 2  -var fast auto -var kt
 # fast auto TOL (keyword of fix pe_jump/async): the fix chooses the fine-clock atoms
 run impact async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
 run cascade async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
+run cascade async-fastauto-b1 -var integrator async -var K 10 -var fast keyword -var tol 0.02 -var buffer 1
