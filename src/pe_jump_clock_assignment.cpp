@@ -117,7 +117,12 @@ void ClockAssignment::find_groups()
 
 bool ClockAssignment::assign_buffer(bool started, InteractionSplit &split)
 {
-  const bool redo = own_group() && (!started || (layers != saved_layers));
+  // a static fast group redefined between runs: atoms of it that are not
+  // on the fine clock (atoms that left it stay on the fine clock, as
+  // buffer atoms would; a dynamic group or fast auto is followed at
+  // coarse nodes)
+  const bool grown = !dynamic && !automatic && started && (fast_off_clock() > 0);
+  const bool redo = own_group() && (!started || (layers != saved_layers) || grown);
   saved_layers = layers;
   if (!redo) return false;
   assign(split);
@@ -195,6 +200,21 @@ bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
   MPI_Allreduce(&any, &global, 1, MPI_INT, MPI_MAX, world);
   changed();    // the state of the atoms is carried over: it fits this fine clock
   return global != 0;
+}
+
+/* ----------------------------------------------------------------------
+   atoms of the fast group in the fix group that are not on the fine clock
+   (global)
+------------------------------------------------------------------------- */
+
+bigint ClockAssignment::fast_off_clock() const
+{
+  const int *mask = atom->mask;
+  bigint local = 0, all = 0;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & finebit) && (mask[i] & fix->groupbit) && !(mask[i] & clockbit)) ++local;
+  MPI_Allreduce(&local, &all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  return all;
 }
 
 /* ----------------------------------------------------------------------

@@ -42,8 +42,9 @@ namespace PEJump {
     void find_groups();           // at init: the group bits, again (groups may be deleted)
     int clock_bit() const { return clockbit; }
 
-    // at setup: (re)assign the buffer when the scheme starts or the layers
-    // differ from those of the last run or restart file; true if done
+    // at setup: (re)assign the buffer when the scheme starts, the layers
+    // differ from those of the last run or restart file, or a static fast
+    // group has atoms off the fine clock (redefined); true if done
     bool assign_buffer(bool started, InteractionSplit &);
     // a dynamic fast group, or atoms chosen by the fix (chosen[i] = 1,
     // owned atoms; nullptr: none): at a coarse node, take them (and the
@@ -99,6 +100,7 @@ namespace PEJump {
     bool own_group() const;
     void assign(InteractionSplit &, const std::vector<int> *chosen = nullptr);
     void fast_signature(double *, const std::vector<int> *chosen) const;
+    bigint fast_off_clock() const;
   };
 
   // The classes of the atoms of pe_jump/async at coarse nodes, for output
