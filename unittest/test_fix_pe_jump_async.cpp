@@ -1037,3 +1037,46 @@ TEST(PEJumpAsync, FastAutoTakesAHotAtomOnTheFineClock)
     EXPECT_LT(worst, 1e-13) << rule;
   }
 }
+
+/* ----------------------------------------------------------------------
+   fast auto across a restart: the fix chooses the same atoms from the
+   restored state, so the continued run is the unbroken one
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, FastAutoRestartIsExact)
+{
+  const std::string fix = "fix 1 all pe_jump/async 10 none fast auto 0.03";
+  const auto setup = [](Sim &s) {
+    bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
+    s.cmds({"bond_coeff 2 1.0 1.0", "group none id 0", "velocity all create 0.2 8191"});
+  };
+  std::vector<double> unbroken, restarted;
+  double prd[3], changed = 0.0;
+  {
+    Sim s;
+    setup(s);
+    s.cmds({fix, "thermo 10", "run 200"});
+    const auto fine0 = on_fine_clock(s);
+    s.cmd("run 200");
+    const auto fine1 = on_fine_clock(s);
+    for (size_t id = 1; id < fine0.size(); id++) changed += (fine0[id] != fine1[id]) ? 1.0 : 0.0;
+    unbroken = positions(s);
+    for (int k = 0; k < 3; k++) prd[k] = s.lmp->domain->prd[k];
+  }
+  {
+    Sim s;
+    setup(s);
+    s.cmds({fix, "thermo 10", "run 200", "write_restart pe_jump_auto.restart", "clear",
+            "read_restart pe_jump_auto.restart", "comm_modify cutoff 2.5", "neighbor 0.3 bin",
+            "neigh_modify every 1 delay 0 check yes", "fix 2d all enforce2d", fix, "run 200"});
+    restarted = positions(s);
+    std::remove("pe_jump_auto.restart");
+  }
+  EXPECT_GT(changed, 5.0);    // the choice changed across the restart
+  double worst = 0.0;
+  for (size_t n = 0; n < unbroken.size(); n++) {
+    const double d = restarted[n] - unbroken[n];
+    worst = std::max(worst, std::fabs(d - prd[n % 3] * std::round(d / prd[n % 3])));
+  }
+  EXPECT_LT(worst, 1e-13);    // the restart sorts the atoms: round-off
+}
