@@ -146,7 +146,8 @@ TEST(PEJumpRanks, BondedLatticeSameOn1And2And4Ranks)
                core + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3",
                "newton off\n" + core + "fix 1 all pe_jump/async 5 fast",
                moving + "fix 1 all pe_jump/async 5 fast",
-               moving + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3 buffer 1"},
+               moving + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3 buffer 1",
+               core + "fix 1 all pe_jump/async 5 fast fast auto 0.05"},
               true, 216, box);
 }
 
