@@ -309,20 +309,18 @@ void FixPEJump::node_impulses()
 
 void FixPEJump::open_steps()
 {
+  scheme->open(group_atoms(), false);
+  if (!(split_primary() && rule->has_end_nodes())) return;
   double **v = atom->v;
   double **f = atom->f;
-  double **jump = scheme->jump();
   double **fstart = scheme->fstart();
-  const bool half_kick = split_primary() && rule->has_end_nodes();
   const double dth = 0.5 * h_step * force->ftm2v;
   for_atoms([&](int i) {
-    for (int k = 0; k < 3; k++) v[i][k] += 0.5 * jump[i][k];
-    if (half_kick && !std::isnan(fstart[i][0])) {
-      const double dtfm = dth * scheme->inverse_mass_of(i);
-      for (int k = 0; k < 3; k++) v[i][k] += dtfm * (f[i][k] - fstart[i][k]);
-    }
+    if (std::isnan(fstart[i][0])) return;
+    const double dtfm = dth * scheme->inverse_mass_of(i);
+    for (int k = 0; k < 3; k++) v[i][k] += dtfm * (f[i][k] - fstart[i][k]);
   });
-  if (half_kick) guard->forget_stats();
+  guard->forget_stats();
 }
 
 /* ---------------------------------------------------------------------- */

@@ -493,7 +493,6 @@ void FixPEJumpAsync::change_clocks()
   std::vector<int> to_fine, chosen;
   if (opts.fast_auto > 0.0) choose_fast(chosen);
   const bool changed = assign->follow(*split, to_fine, chosen.empty() ? nullptr : &chosen);
-  if (changed) carry_jumps(to_fine);
   if (changed || !split->up_to_date()) {
     split->build();
     assign->find_slow(*split);
@@ -501,13 +500,26 @@ void FixPEJumpAsync::change_clocks()
     first->find_partners(assign->participants(), assign->moving(), groupbit);
   }
   if (!changed) return;
+  // the forces at the node: with a Lobatto rule the start nodes of both
+  // subsets are taken anew, and an atom's force is their sum (an
+  // interaction of a fine-clock atom is a fine one), else one evaluation
   if (rule->has_end_nodes()) {
     store_start_node();
-    evals_total += 1.0;    // the two subsets once
+    grow_work();
+    double **total = work->get(SUM);
+    double **fstart = scheme->fstart();
+    double **fstart_coarse = state->vec(FSTART_COARSE);
+    for (int i = 0; i < atom->nlocal; i++)
+      for (int k = 0; k < 3; k++) total[i][k] = fstart[i][k] + fstart_coarse[i][k];
+    restart_jumps(to_fine, total);
+  } else {
+    NodeSampler::Keep keep(*nodes);
+    sampler->compute(ForceSampler::ALL, 0, 0);
+    restart_jumps(to_fine, atom->f);
   }
+  evals_total += 1.0;
   guard->forget_stats();
   slow_magnitudes();
-  scheme->forget_energies();
   classes->label(*split, *assign, groupbit);
 }
 
@@ -546,42 +558,39 @@ void FixPEJumpAsync::choose_fast(std::vector<int> &chosen) const
 /* ----------------------------------------------------------------------
    the atoms that changed clock (to_fine[i] = 1: to the fine clock, -1: to
    the coarse clock) start their new clock with the initial kick of the
-   scheme, [v]^n = h_new F(q^n)/m, from one evaluation of all forces at the
-   node (the smooth jump of the new step; whatever parasitic jump the old
-   clock carried is dropped), less the mass-weighted mean of the change,
-   so that sum m [v] stays what it was. Node velocities are untouched.
+   scheme, [v]^n = h_new F(q^n)/m, with f the forces at the node (the
+   smooth jump of the new step; whatever parasitic jump the old clock
+   carried is dropped), less the mass-weighted mean of the change, so
+   that sum m [v] stays what it was. Node velocities are untouched.
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::carry_jumps(const std::vector<int> &to_fine)
+void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
 {
-  NodeSampler::Keep keep(*nodes);
-  sampler->compute(ForceSampler::ALL, 0, 0);
-  evals_total += 1.0;
-  double **f = atom->f;
+  AtomList changed;
+  for (int i = 0; i < atom->nlocal; i++)
+    if (to_fine[i] && (atom->mask[i] & groupbit)) changed.push_back(i);
   double **jump = scheme->jump();
   const double *rmass = atom->rmass;
   const double *mass = atom->mass;
   const int *type = atom->type;
-  const double fine = update->dt * force->ftm2v, coarse = clocks->steps() * fine;
+  std::vector<double> before;    // the jumps of the old clock
+  for (const int i : changed) before.insert(before.end(), jump[i], jump[i] + 3);
+  const double fine = update->dt, coarse = clocks->steps() * update->dt;
+  scheme->start(group_atoms(&changed), f, 1.0, [&](int i) {
+    return (to_fine[i] > 0) ? fine : coarse;
+  });
   double local[4] = {0.0, 0.0, 0.0, 0.0};    // sum m d[v], sum m
-  for (int i = 0; i < atom->nlocal; i++) {
-    if (!to_fine[i] || !(atom->mask[i] & groupbit)) continue;
+  for (size_t n = 0; n < changed.size(); n++) {
+    const int i = changed[n];
     const double m = rmass ? rmass[i] : mass[type[i]];
-    const double dtfm = ((to_fine[i] > 0) ? fine : coarse) / m;
-    for (int k = 0; k < 3; k++) {
-      const double now = dtfm * f[i][k];
-      local[k] += m * (now - jump[i][k]);
-      jump[i][k] = now;
-    }
+    for (int k = 0; k < 3; k++) local[k] += m * (jump[i][k] - before[3 * n + k]);
     local[3] += m;
   }
   double sum[4];
   MPI_Allreduce(local, sum, 4, MPI_DOUBLE, MPI_SUM, world);
   if (!(sum[3] > 0.0)) return;
-  for (int i = 0; i < atom->nlocal; i++) {
-    if (!to_fine[i] || !(atom->mask[i] & groupbit)) continue;
+  for (const int i : changed)
     for (int k = 0; k < 3; k++) jump[i][k] -= sum[k] / sum[3];
-  }
 }
 
 /* ----------------------------------------------------------------------
@@ -1005,8 +1014,6 @@ void FixPEJumpAsync::unpack_reverse_comm(int n, int *list, double *buf)
 double FixPEJumpAsync::compute_vector(int n)
 {
   switch (n) {
-    case 5:
-      return clocks->at_coarse_node() ? 1.0 : 0.0;
     case 0:
     case 1:
       return scheme->energies(group_atoms())[n];
@@ -1016,6 +1023,8 @@ double FixPEJumpAsync::compute_vector(int n)
       return evals_step;
     case 4:
       return evals_total;
+    case 5:
+      return clocks->at_coarse_node() ? 1.0 : 0.0;
     case 6:
     case 7:
     case 8:

@@ -128,7 +128,7 @@ class FixPEJumpAsync : public Fix {
   void start_scheme(const char *, bool);
   void change_clocks();    // a dynamic fast group or fast auto, at coarse nodes
   void choose_fast(std::vector<int> &chosen) const;
-  void carry_jumps(const std::vector<int> &to_fine);
+  void restart_jumps(const std::vector<int> &to_fine, double **f);
   void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
   void continue_scheme();
   void node_impulses();

@@ -209,13 +209,6 @@ void TwoStep::mark_all(const AtomSet &set) const
 
 /* ---------------------------------------------------------------------- */
 
-bool TwoStep::changed(int i) const
-{
-  return velocity_fingerprint(atom->v[i]) != vsig()[i];
-}
-
-/* ---------------------------------------------------------------------- */
-
 bool TwoStep::any_changed(const AtomSet &set) const
 {
   double **v = atom->v;

@@ -97,7 +97,6 @@ namespace PEJump {
 
     void mark(int i) const;    // the fingerprint of atom->v[i]
     void mark_all(const AtomSet &) const;
-    bool changed(int i) const;                  // atom->v[i] is not the one the scheme left
     bool any_changed(const AtomSet &) const;    // on this rank
 
     // 0: the velocities are those the scheme left, 1: all were reversed
