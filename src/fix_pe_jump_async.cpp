@@ -49,6 +49,7 @@
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_two_step.h"
 #include "pe_jump_work_forces.h"
+#include "timer.h"
 #include "update.h"
 
 #include <cmath>
@@ -73,7 +74,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
     assign(nullptr), classes(nullptr), work(nullptr), first(nullptr), reinit_pending(0),
-    eflag_step(0), vflag_step(0), h_step(0.0), evals_step(0.0), evals_total(0.0), changes_seen(0)
+    opened_ahead(0), eflag_step(0), vflag_step(0), h_step(0.0), evals_step(0.0), evals_total(0.0),
+    changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -371,9 +373,8 @@ void FixPEJumpAsync::catch_up_all()
 }
 
 /* ----------------------------------------------------------------------
-   free flight to the primary node: the moving atoms every fine step, all
-   atoms of the group (the interior slow ones from where they stopped) at
-   the last fine step of a coarse step
+   free flight to the primary node of a fine step inside a coarse step:
+   the atoms that move on fine steps
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::advance(double t)
@@ -381,23 +382,57 @@ void FixPEJumpAsync::advance(double t)
   double **x = atom->x;
   const PEJump::FreeFlight vhalf = free_flight();
   clocks->moving_at(t);
-  if (!clocks->last_fine_step()) {
+  if (!opened_ahead)
     for (const int i : assign->moving_atoms)
       for (int k = 0; k < 3; k++) x[i][k] += t * vhalf(i, k);
-  } else {
-    const int *mask = atom->mask;
-    const int nlocal = atom->nlocal;
-    double *tpos = clocks->times();
-    for (int i = 0; i < nlocal; i++) {
-      if (!(mask[i] & groupbit)) continue;
-      const double dt = (tpos[i] == AsyncClocks::MOVING) ? t : clocks->now() - tpos[i];
-      for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
-      tpos[i] = AsyncClocks::MOVING;
-    }
-  }
   // with neigh_modify include, LAMMPS checks the distances of the atoms of
   // the include group only
-  if (first->moved_too_far(groupbit, clocks->last_fine_step())) next_reneighbor = update->ntimestep;
+  if (first->moved_too_far(groupbit, false)) next_reneighbor = update->ntimestep;
+}
+
+/* ----------------------------------------------------------------------
+   the last fine step of a coarse step: every atom of the group moves to
+   its primary node (the interior slow ones from where they stopped, a lag
+   behind), in the same pass as the stability guard measures the fine
+   nodes and, for the slow atoms, the coarse nodes q_S^n + c H v_S, H the
+   coarse step, from the positions before the move
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::all_to_primary_node(double t)
+{
+  const int first_node = rule->has_end_nodes() ? 1 : 0;
+  const double c_lo = rule->node[first_node];
+  const double elapsed = clocks->start(), span = elapsed + h_step;
+  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+  const StabilityGuard::Nodes at{h_step,
+                                 c_lo * h_step,
+                                 (nodes->tally_step() ? 1.0 : rule->node.back()) * h_step,
+                                 t,
+                                 assign->slow(),
+                                 c_lo * span - elapsed,
+                                 rule->node.back() * span - elapsed,
+                                 clocks->steps() * h_step,
+                                 nullptr};
+  double **x = atom->x;
+  double **jump = scheme->jump();
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  const PEJump::FreeFlight vhalf = free_flight();
+  double *tpos = clocks->times();
+  double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  clocks->moving_at(t);
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
+    const double v[3] = {vhalf(i, 0), vhalf(i, 1), vhalf(i, 2)};
+    const bool lags = (tpos[i] != AsyncClocks::MOVING);
+    StabilityGuard::measure_one(x[i], xhold ? xhold[i] : nullptr, v, jump[i], at,
+                                at.select && at.select[i], lags ? elapsed - tpos[i] : 0.0, local);
+    const double dt = lags ? clocks->now() - tpos[i] : t;
+    for (int k = 0; k < 3; k++) x[i][k] += dt * v[k];
+    tpos[i] = AsyncClocks::MOVING;
+  }
+  finish_check(local);
+  if (first->moved_too_far(groupbit, true)) next_reneighbor = update->ntimestep;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -422,6 +457,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   // new atoms take theirs at their first evaluation
   scheme->fresh = 0;
   changes_seen = 0;
+  opened_ahead = 0;
   check_clocks();
 
   grow_work();
@@ -474,10 +510,18 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
   reinit_pending = 0;
   h_step = update->dt;
   if (clocks->at_coarse_node() && scheme->started) change_clocks();
-  node_impulses();
-  open_steps();
-  check_lists();
-  advance(rule->node[rule->primary()] * h_step);
+  if (!opened_ahead) {
+    node_impulses();
+    open_steps();
+  }
+  const double t = rule->node[rule->primary()] * h_step;
+  if (clocks->last_fine_step()) {
+    all_to_primary_node(t);
+  } else {
+    check_lists();
+    advance(t);
+  }
+  opened_ahead = 0;
 }
 
 /* ----------------------------------------------------------------------
@@ -707,25 +751,25 @@ void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 }
 
 /* ----------------------------------------------------------------------
-   fine nodes for every atom; on the last fine step of a coarse step also
-   the coarse nodes q_S^n + c H v_S of the slow atoms, H the coarse step,
-   measured from the current position q_S^n + elapsed v_S
+   the nodes of a fine step inside a coarse step (the atoms on the fine
+   clock and the slow atoms in a fine interaction move to them)
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::check_lists()
 {
-  const int first = rule->has_end_nodes() ? 1 : 0;
-  const double c_lo = rule->node[first];
+  const int first_node = rule->has_end_nodes() ? 1 : 0;
+  const double c_lo = rule->node[first_node];
   const bool tally = nodes->tally_step();
   const double c_hi = tally ? 1.0 : rule->node.back();
-  const double coarse_step = clocks->steps() * h_step;
-  const bool coarse_end = clocks->last_fine_step();
+  // atoms opened ahead are at the primary node already: the nodes from there
+  const double from = opened_ahead ? rule->node[rule->primary()] : 0.0;
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
-  if (!coarse_end && guard->has_stats()) {
+  if (guard->has_stats()) {
     // the magnitudes were taken per clock by final_integrate(); the fine
     // nodes' excursions matter only for the atoms that move to them, and
     // not at all if the Verlet loop checks the only node
+    const double coarse_step = clocks->steps() * h_step;
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
     local[1] = MAX(hf2 * guard->speed2(), hs2 * guard->slow_speed2());
     local[2] = MAX(hf2 * guard->jump2(), hs2 * guard->slow_jump2());
@@ -733,27 +777,13 @@ void FixPEJumpAsync::check_lists()
     local[4] = MAX(guard->speed2(), guard->slow_speed2());
     if (xhold && (tally || (rule->size() > 1)))
       local[0] = guard->excursion(group_atoms(&assign->moving_atoms), free_flight(), xhold,
-                                  c_lo * h_step, c_hi * h_step);
-    finish_check(local);
-    return;
-  }
-  const double cp = rule->node[rule->primary()] * h_step;
-  StabilityGuard::Nodes at{h_step, c_lo * h_step, c_hi * h_step, cp,     assign->slow(),
-                           0.0,    0.0,           coarse_step,   nullptr};
-  if (coarse_end) {
-    // the coarse nodes q_S^n + c H v_S of the slow atoms, measured from
-    // their current positions q_S^n + elapsed v_S (less their lag)
-    const double elapsed = clocks->start(), span = elapsed + h_step;
-    const double *tpos = clocks->times();
-    const int nlocal = atom->nlocal;
-    std::vector<double> lag(nlocal);    // time by which an atom lags behind
-    for (int i = 0; i < nlocal; i++)
-      lag[i] = (tpos[i] == AsyncClocks::MOVING) ? 0.0 : elapsed - tpos[i];
-    at.lo2 = c_lo * span - elapsed;
-    at.hi2 = rule->node.back() * span - elapsed;
-    at.lag = lag.data();
-    guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
+                                  (c_lo - from) * h_step, (c_hi - from) * h_step);
   } else {
+    const double cp = rule->node[rule->primary()] * h_step;
+    const StabilityGuard::Nodes at{
+        h_step,         c_lo * h_step, c_hi * h_step, cp,
+        assign->slow(), 0.0,           0.0,           clocks->steps() * h_step,
+        nullptr};
     guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
   }
   finish_check(local);
@@ -946,6 +976,21 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
 }
 
 /* ----------------------------------------------------------------------
+   true if the next fine step, inside the same coarse step, can begin as
+   this one ends (continue_fine_step() opens it and moves the moving atoms
+   on to its primary node): a single-node rule, nothing that looks at the
+   atoms or may change their velocities in between, lists checked by
+   distance, no timeout that may end the run before the next step
+------------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::may_open_ahead() const
+{
+  return (rule->size() == 1) && !clocks->next_is_last() && neighbor->dist_check &&
+      !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) && !others->step_observed() &&
+      !timer->has_timeout();
+}
+
+/* ----------------------------------------------------------------------
    inside a coarse step: the atoms on the fine clock take a synchronous
    step; of the slow atoms those in a fine interaction move on, and they
    (and the others, if other fixes add forces) collect the fine forces
@@ -961,11 +1006,18 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
   const int *moving = assign->moving();
   const PEJump::FreeFlight vhalf = free_flight();
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
-  scheme->jump_loop(
-      group_atoms(&assign->fast_atoms), favg,
-      {h_step, rest, -1.0, fstart ? fsample : nullptr, watch(OtherFixes::BETWEEN_STEPS)}, mag);
+  opened_ahead = may_open_ahead();
+  // the next fine step begins in the same pass, unless something looks
+  const double ahead = opened_ahead ? rule->node[rule->primary()] * update->dt : -1.0;
+  const bool fingerprint =
+      watch(opened_ahead ? OtherFixes::INSIDE_STEP : OtherFixes::BETWEEN_STEPS);
+  scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
+                    {h_step, rest, ahead, fstart ? fsample : nullptr, fingerprint}, mag);
   for (const int i : assign->slow_moving)
-    for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf(i, k);
+    for (int k = 0; k < 3; k++) {
+      x[i][k] += rest * vhalf(i, k);
+      if (opened_ahead) x[i][k] += ahead * vhalf(i, k);
+    }
   // forces on interior slow atoms come only from fixes that add forces
   // (fix enforce2d, the only other one allowed, zeroes a zero component)
   for (const int i : others->add_forces() ? assign->slow_atoms : assign->slow_moving) {

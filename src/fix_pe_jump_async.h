@@ -110,6 +110,7 @@ class FixPEJumpAsync : public Fix {
   int FACC, FSTART_COARSE;
 
   int reinit_pending;    // redo the initial kick when all fix forces are in
+  int opened_ahead;      // the last fine step began this one (nothing looked in between)
   int eflag_step, vflag_step;
   double h_step;                     // the fine step
   double evals_step, evals_total;    // force evaluations (units of full ones)
@@ -137,7 +138,9 @@ class FixPEJumpAsync : public Fix {
   void check_lists();
   void finish_check(const double *local);
   std::string instability_advice() const;
+  bool may_open_ahead() const;
   void advance(double);
+  void all_to_primary_node(double);
   void slow_magnitudes();
   void catch_up_all();    // the atoms that sit out fine steps catch up
   double node_cost() const;

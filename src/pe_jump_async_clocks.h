@@ -37,6 +37,7 @@ namespace PEJump {
     int done() const { return fine; }    // fine steps done in this coarse step
     bool at_coarse_node() const { return fine == 0; }
     bool last_fine_step() const { return fine + 1 >= nfine; }
+    bool next_is_last() const { return fine + 2 >= nfine; }    // inside a fine step
     double start() const { return elapsed; }    // time at the start of this fine step
     double now() const { return tnow; }         // time of the atoms that move
 

@@ -64,33 +64,11 @@ void StabilityGuard::measure(const AtomSet &set, const FreeFlight &vel, double *
                              double **xhold, const Nodes &at, double *local) const
 {
   double **x = atom->x;
-  const auto one = [&](int i) {
+  set.each(atom->mask, atom->nlocal, [&](int i) {
     const double vhalf[3] = {vel(i, 0), vel(i, 1), vel(i, 2)};
-    const bool both = at.select && at.select[i];
-    const double h = both ? at.hsel : at.h;
-    const double late = at.lag ? at.lag[i] : 0.0;
-    double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
-    for (int k = 0; k < 3; k++) {
-      vv += vhalf[k] * vhalf[k];
-      jj += jump[i][k] * jump[i][k];
-      if (xhold) {
-        const double a = x[i][k] - xhold[i][k];
-        const double ends[4] = {a + at.lo * vhalf[k], a + at.hi * vhalf[k],
-                                a + (at.lo2 + late) * vhalf[k], a + (at.hi2 + late) * vhalf[k]};
-        for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
-      }
-    }
-    double span = h;
-    if (both) span = MAX(span, MAX(fabs(at.lo2 - at.cp), fabs(at.hi2 - at.cp)));
-    double step = span * span * vv, jmp = h * h * jj;
-    if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = vv = jj = BLOWUP;
-    local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
-    local[1] = MAX(local[1], step);
-    local[2] = MAX(local[2], jmp);
-    local[3] = MAX(local[3], jj);
-    local[4] = MAX(local[4], vv);
-  };
-  set.each(atom->mask, atom->nlocal, one);
+    measure_one(x[i], xhold ? xhold[i] : nullptr, vhalf, jump[i], at, at.select && at.select[i],
+                at.lag ? at.lag[i] : 0.0, local);
+  });
 }
 
 /* ---------------------------------------------------------------------- */

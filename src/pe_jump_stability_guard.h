@@ -16,6 +16,7 @@
 
 #include "pe_jump_node_sampler.h"
 
+#include <cmath>
 #include <functional>
 #include <string>
 
@@ -63,6 +64,35 @@ namespace PEJump {
     };
     void measure(const AtomSet &, const FreeFlight &, double **jump, double **xhold, const Nodes &,
                  double *local) const;
+
+    // the same for one atom at x (xhold its build position or null) moving
+    // with vhalf, both: it is selected, late: its lag
+    static void measure_one(const double *x, const double *xhold, const double *vhalf,
+                            const double *jump, const Nodes &at, bool both, double late,
+                            double *local)
+    {
+      const double h = both ? at.hsel : at.h;
+      double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
+      for (int k = 0; k < 3; k++) {
+        vv += vhalf[k] * vhalf[k];
+        jj += jump[k] * jump[k];
+        if (xhold) {
+          const double a = x[k] - xhold[k];
+          const double ends[4] = {a + at.lo * vhalf[k], a + at.hi * vhalf[k],
+                                  a + (at.lo2 + late) * vhalf[k], a + (at.hi2 + late) * vhalf[k]};
+          for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
+        }
+      }
+      double span = h;
+      if (both) span = MAX(span, MAX(fabs(at.lo2 - at.cp), fabs(at.hi2 - at.cp)));
+      double step = span * span * vv, jmp = h * h * jj;
+      if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = vv = jj = BLOWUP;
+      local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
+      local[1] = MAX(local[1], step);
+      local[2] = MAX(local[2], jmp);
+      local[3] = MAX(local[3], jj);
+      local[4] = MAX(local[4], vv);
+    }
 
     // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
     double excursion(const AtomSet &, const FreeFlight &, double **xhold, double lo,
