@@ -848,6 +848,40 @@ TEST(PEJumpAsync, IncludeGroupKeepsTheTrajectory)
 }
 
 /* ----------------------------------------------------------------------
+   a midpoint fine step inside a coarse step opens the next one in its
+   jump loop, unless something may look at the atoms in between (here a
+   timeout, which may end the run after any step, keeps the steps apart):
+   the trajectory is the same, bit for bit, through list rebuilds, energy
+   tallies, the opt-in and split runs
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, OpeningTheNextFineStepAheadKeepsTheTrajectory)
+{
+  struct Case {
+    std::string what, include;
+    std::vector<std::string> run;
+    double skin;
+  };
+  const std::string band = "block INF INF 0 1.6 INF INF";
+  const std::string async = "fix 1 all pe_jump/async 10 stiff";
+  const std::vector<Case> cases = {
+      {"rebuilds", "", {async, "thermo 7", "run 400"}, 0.1},
+      {"opt-in", "type 2", {async, "thermo 7", "run 400"}, 0.1},
+      {"buffer", "", {async + " buffer 1", "thermo 13", "run 203", "run 197 pre no"}, 0.1},
+  };
+  for (const auto &c : cases) {
+    auto looked = c.run;
+    looked.insert(looked.begin(), "timer timeout 99:00:00");
+    const auto fused = lattice_run(band, c.include, c.run, c.skin);
+    const auto stepwise = lattice_run(band, c.include, looked, c.skin);
+    ASSERT_EQ(fused.x.size(), 3u * 168u) << c.what;
+    EXPECT_EQ(max_diff(fused.x, stepwise.x), 0.0) << c.what;
+    EXPECT_EQ(fused.builds, stepwise.builds) << c.what;
+    EXPECT_GT(fused.builds, 3) << c.what;
+  }
+}
+
+/* ----------------------------------------------------------------------
    what the opt-in cannot work with is refused
 ------------------------------------------------------------------------- */
 
