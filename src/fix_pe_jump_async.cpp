@@ -823,8 +823,10 @@ void FixPEJumpAsync::fine_quadrature_sum()
   double **fsum = work->get(SUM);
   const AtomList &moving = assign->moving_atoms;
 
-  // the end node's forces are the next step's start node
-  if (reuse_start && atom->nlocal)
+  // the end node's forces are the next step's start node; inside a coarse
+  // step they stay in f (the node evaluations put f back), on the last fine
+  // step the coarse evaluations overwrite it
+  if (reuse_start && atom->nlocal && clocks->last_fine_step())
     memcpy(&work->get(SAMPLE)[0][0], &f[0][0], 3 * sizeof(double) * atom->nlocal);
   for (const int i : moving) {
     if (reuse_start && std::isnan(fstart[i][0]))
@@ -1002,7 +1004,7 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
   double **f = atom->f;
   double **facc = state->vec(FACC);
   double **fstart = scheme->fstart();
-  double **fsample = work->get(SAMPLE);
+  double **fsample = f;    // the end node's forces (fine_quadrature_sum())
   const int *moving = assign->moving();
   const PEJump::FreeFlight vhalf = free_flight();
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
