@@ -835,13 +835,7 @@ void FixPEJump::check_excursion(double lo, double hi)
 {
   const double cp = rule->node[rule->primary()] * h_step;
   const bool primary_only = (lo == cp) && (hi == cp);
-  // Lobatto rules: the nodes lie between q^n and q^{n+1} (the primary
-  // node), whose distances from the last build LAMMPS checks if it checks
-  // every step; the largest distance of x + t v over t in [0, h] is at one
-  // of the ends, and after a build at q^{n+1} the nodes are within one step
-  // length (bounded by the guard) of it
-  const bool ends_checked = rule->has_end_nodes() && (neighbor->every == 1) &&
-      (neighbor->delay == 0) && (lo >= 0.0) && (hi <= h_step);
+  const bool ends_checked = guard->ends_checked(*rule, lo, hi, h_step);
   double **xhold = (neighbor->dist_check && !primary_only && !ends_checked) ? neighbor->get_xhold()
                                                                             : nullptr;
   if (opened_ahead) {

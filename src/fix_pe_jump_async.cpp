@@ -768,16 +768,16 @@ void FixPEJumpAsync::check_lists()
   if (guard->has_stats()) {
     // the magnitudes were taken per clock by final_integrate(); the fine
     // nodes' excursions matter only for the atoms that move to them, and
-    // not at all if the Verlet loop checks the only node
+    // not at all if the Verlet loop checks the only node or the step ends
     const double coarse_step = clocks->steps() * h_step;
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
     local[1] = MAX(hf2 * guard->speed2(), hs2 * guard->slow_speed2());
     local[2] = MAX(hf2 * guard->jump2(), hs2 * guard->slow_jump2());
     local[3] = MAX(guard->jump2(), guard->slow_jump2());
     local[4] = MAX(guard->speed2(), guard->slow_speed2());
-    if (xhold && (tally || (rule->size() > 1)))
-      local[0] = guard->excursion(group_atoms(&assign->moving_atoms), free_flight(), xhold,
-                                  (c_lo - from) * h_step, (c_hi - from) * h_step);
+    const double lo = (c_lo - from) * h_step, hi = (c_hi - from) * h_step;
+    if (xhold && (tally || (rule->size() > 1)) && !guard->ends_checked(*rule, lo, hi, h_step))
+      local[0] = guard->excursion(group_atoms(&assign->moving_atoms), free_flight(), xhold, lo, hi);
   } else {
     const double cp = rule->node[rule->primary()] * h_step;
     const StabilityGuard::Nodes at{

@@ -16,6 +16,7 @@
 #include "atom.h"
 #include "error.h"
 #include "neighbor.h"
+#include "pe_jump_quadrature.h"
 #include "update.h"
 
 #include <cmath>
@@ -69,6 +70,20 @@ void StabilityGuard::measure(const AtomSet &set, const FreeFlight &vel, double *
     measure_one(x[i], xhold ? xhold[i] : nullptr, vhalf, jump[i], at, at.select && at.select[i],
                 at.lag ? at.lag[i] : 0.0, local);
   });
+}
+
+/* ----------------------------------------------------------------------
+   Lobatto rules: the nodes lie between q^n and q^{n+1} (the primary node),
+   whose distances from the last build LAMMPS checks if it checks every
+   step; the largest distance of x + t v over t in [0, h] is at one of the
+   ends, and after a build at q^{n+1} the nodes are within one step length
+   (bounded by the guard) of it
+------------------------------------------------------------------------- */
+
+bool StabilityGuard::ends_checked(const Quadrature &rule, double lo, double hi, double h) const
+{
+  return rule.has_end_nodes() && (neighbor->every == 1) && (neighbor->delay == 0) && (lo >= 0.0) &&
+      (hi <= h);
 }
 
 /* ---------------------------------------------------------------------- */

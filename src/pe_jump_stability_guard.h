@@ -94,6 +94,10 @@ namespace PEJump {
       local[4] = MAX(local[4], vv);
     }
 
+    // true if LAMMPS' own check of the step ends covers the nodes x + t v,
+    // t in [lo, hi], of a step h whose nodes include both ends
+    bool ends_checked(const Quadrature &, double lo, double hi, double h) const;
+
     // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
     double excursion(const AtomSet &, const FreeFlight &, double **xhold, double lo,
                      double hi) const;

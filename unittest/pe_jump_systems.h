@@ -4,6 +4,7 @@
 #define PE_JUMP_SYSTEMS_H
 
 #include "atom.h"
+#include "domain.h"
 #include "exceptions.h"
 #include "fix.h"
 #include "input.h"
@@ -80,6 +81,19 @@ inline std::vector<double> positions(Sim &s)
   std::vector<double> x;
   for (int id = 1; id <= s.lmp->atom->natoms; id++)
     for (int k = 0; k < 3; k++) x.push_back(s.x(id, k));
+  return x;
+}
+
+// unwrapped positions of all atoms, by atom ID (serial runs)
+inline std::vector<double> unwrapped_positions(Sim &s)
+{
+  std::vector<double> x;
+  for (int id = 1; id <= s.lmp->atom->natoms; id++) {
+    double unwrap[3];
+    const int i = s.lmp->atom->map(id);
+    s.lmp->domain->unmap(s.lmp->atom->x[i], s.lmp->atom->image[i], unwrap);
+    x.insert(x.end(), unwrap, unwrap + 3);
+  }
   return x;
 }
 

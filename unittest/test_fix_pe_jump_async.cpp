@@ -136,14 +136,40 @@ TEST(PEJumpAsync, OneFineStepPerCoarseStepIsTheSynchronousScheme)
             k ? "fix 1 all pe_jump/async 1 fast quadrature lobatto 3"
               : "fix 1 all pe_jump quadrature lobatto 3",
             "timestep 0.005", "thermo 0", "run 100 post no"});
-    for (int id = 1; id <= s.lmp->atom->natoms; ++id) {
-      double unwrap[3];
-      const int i = s.lmp->atom->map(id);
-      s.lmp->domain->unmap(s.lmp->atom->x[i], s.lmp->atom->image[i], unwrap);
-      out[k].insert(out[k].end(), unwrap, unwrap + 3);
-    }
+    out[k] = unwrapped_positions(s);
   }
   EXPECT_LT(max_diff(out[0], out[1]), 1e-11);
+}
+
+/* ----------------------------------------------------------------------
+   the neighbor lists hold every pair at every node: with a small skin
+   (0.15; the fastest slow atoms move about 0.06 over a coarse step of
+   K = 5) the run equals one that rebuilds the lists before every step
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, ListsHoldEveryPairAtEveryNode)
+{
+  const auto run = [](const std::string &rule, const std::string &lists) {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds({"velocity all scale 0.5", "neighbor 0.15 bin", "neigh_modify " + lists,
+            "region slab block 0 1 INF INF INF INF units lattice", "group fast region slab",
+            "fix 1 all pe_jump/async 5 fast quadrature " + rule, "timestep 0.005", "thermo 0",
+            "run 300"});
+    return std::make_pair(unwrapped_positions(s), s.lmp->neighbor->ncalls);
+  };
+  for (const std::string rule : {"midpoint", "lobatto 3", "legendre 2"}) {
+    const auto always = run(rule, "every 1 delay 0 check no");
+    // LAMMPS checks the primary nodes every step, or every 20th step: then
+    // the fix asks for the rebuilds in between
+    for (const std::string every : {"1", "20"}) {
+      const auto checked = run(rule, "every " + every + " delay 0 check yes");
+      const std::string what = rule + ", every " + every;
+      EXPECT_GT(checked.second, 20) << what;               // the checks rebuild
+      EXPECT_LT(checked.second, always.second) << what;    // but not every step
+      EXPECT_LT(max_diff(checked.first, always.first), 1e-9) << what;
+    }
+  }
 }
 
 /* ----------------------------------------------------------------------
