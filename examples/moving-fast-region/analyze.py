@@ -46,10 +46,12 @@ SCENES = {
     "crack": (["nve", "sync", "async", "async-band", "nve-coarse", "sync-coarse",
                "nve-noshift", "async-noshift", "async-dyn", "async-dyn-k5"], "ref", "E0"),
     "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
-                "async-dyn-r12", "async-auto", "async-fastauto"], "ref", "E0"),
+                "async-dyn-r12", "async-auto", "async-fastauto",
+                "async-fastauto-tol0.1", "async-fastauto-tol0.2"], "ref", "E0"),
     "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
                  "async-auto", "async-auto-k2", "async-fastauto",
-                 "async-fastauto-b1"], "ref", "Epka"),
+                 "async-fastauto-b1", "async-fastauto-tol0.1",
+                 "async-fastauto-tol0.2"], "ref", "Epka"),
 }
 
 
