@@ -110,7 +110,6 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   next_reneighbor = -1;
 
   reinit_pending = opened_ahead = before_open = 0;
-  eflag_step = vflag_step = 0;
   h_step = 0.0;
   evals_step = evals_total = 0.0;
 
@@ -488,8 +487,7 @@ void FixPEJump::check_lists()
 
 void FixPEJump::pre_reverse(int eflag, int vflag)
 {
-  eflag_step = eflag;
-  vflag_step = vflag;
+  nodes->note_step_flags(eflag, vflag);
   if (!use_copy()) return;
   grow_work();
   const int nall = atom->nlocal + atom->nghost;
@@ -621,7 +619,7 @@ bool FixPEJump::may_open_ahead() const
 
 void FixPEJump::tally_at_node()
 {
-  evals_step += nodes->at_step_end(eflag_step, vflag_step, others->step_observed());
+  evals_step += nodes->at_step_end(others->step_observed());
 }
 
 /* ----------------------------------------------------------------------

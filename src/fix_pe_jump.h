@@ -96,11 +96,10 @@ class FixPEJump : public Fix {
   PEJump::OtherFixes *others;
   PEJump::WorkForces *work;    // SUM: the quadrature sum, SAMPLE: the sampled primary force
 
-  int reinit_pending;        // redo the initial kick when all fix forces are in
-  int opened_ahead;          // the last step began this one already
-  int before_open;           // atom->v holds v^n while this step's nodes are checked
-  double advance_pending;    // free flight left for after this step's list build
-  int eflag_step, vflag_step;
+  int reinit_pending;                // redo the initial kick when all fix forces are in
+  int opened_ahead;                  // the last step began this one already
+  int before_open;                   // atom->v holds v^n while this step's nodes are checked
+  double advance_pending;            // free flight left for after this step's list build
   double h_step;                     // step size used in the current step
   double evals_step, evals_total;    // force evaluations (units of full ones)
 

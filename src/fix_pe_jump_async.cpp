@@ -74,8 +74,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
     assign(nullptr), classes(nullptr), work(nullptr), first(nullptr), reinit_pending(0),
-    opened_ahead(0), eflag_step(0), vflag_step(0), h_step(0.0), evals_step(0.0), evals_total(0.0),
-    changes_seen(0)
+    opened_ahead(0), h_step(0.0), evals_step(0.0), evals_total(0.0), changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -746,8 +745,7 @@ void FixPEJumpAsync::setup_pre_force(int /*vflag*/)
 void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 {
   split->restore();
-  eflag_step = eflag;
-  vflag_step = vflag;
+  nodes->note_step_flags(eflag, vflag);
 }
 
 /* ----------------------------------------------------------------------
@@ -911,15 +909,15 @@ void FixPEJumpAsync::final_integrate()
   if (!coarse_end && others->step_observed()) catch_up_all();
 
   split->activate(InteractionSplit::ALL);
-  evals_step += nodes->at_step_end(eflag_step, vflag_step, others->step_observed());
+  evals_step += nodes->at_step_end(others->step_observed());
   split->restore();
-  if (eflag_step || vflag_step) first->forces_written();    // on every atom
+  if (nodes->step_tallies()) first->forces_written();    // on every atom
   evals_total += evals_step;
   scheme->forget_energies();
 
   // the labels are output only: take them where something looks, when
   // tally_at_node() has brought the ghosts to the node
-  if (coarse_end && (eflag_step || vflag_step || others->step_observed()))
+  if (coarse_end && (nodes->step_tallies() || others->step_observed()))
     classes->label(*split, *assign, groupbit);
 }
 

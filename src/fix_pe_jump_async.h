@@ -111,8 +111,7 @@ class FixPEJumpAsync : public Fix {
 
   int reinit_pending;    // redo the initial kick when all fix forces are in
   int opened_ahead;      // the last fine step began this one (nothing looked in between)
-  int eflag_step, vflag_step;
-  double h_step;                     // the fine step
+  double h_step;         // the fine step
   double evals_step, evals_total;    // force evaluations (units of full ones)
   int changes_seen;                  // another fix changed a velocity (this rank)
 

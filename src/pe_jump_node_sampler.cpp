@@ -30,7 +30,8 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 NodeSampler::NodeSampler(LAMMPS *lmp, ForceSampler *forces) :
-    Pointers(lmp), sampler(forces), xkept(nullptr), fkept(nullptr), nkept(0), keeping(false)
+    Pointers(lmp), sampler(forces), xkept(nullptr), fkept(nullptr), nkept(0), keeping(false),
+    eflag_step(0), vflag_step(0)
 {
 }
 
@@ -167,10 +168,10 @@ double NodeSampler::memory_usage() const
 
 /* ---------------------------------------------------------------------- */
 
-double NodeSampler::at_step_end(int eflag, int vflag, bool observed)
+double NodeSampler::at_step_end(bool observed)
 {
-  if (eflag || vflag) {
-    sampler->compute(ForceSampler::ALL, eflag, vflag);
+  if (step_tallies()) {
+    sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
     return 1.0;
   }
   if (observed) comm->forward_comm();

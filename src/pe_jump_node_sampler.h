@@ -98,12 +98,21 @@ namespace PEJump {
                   const FreeFlight &v, const AtomSet &set, int mask, double **acc, double **fend,
                   bool keep_forces = true);
 
+    // the energy and virial flags the MD step's force evaluation got
+    // (pre_reverse()); whether it tallies
+    void note_step_flags(int eflag, int vflag)
+    {
+      eflag_step = eflag;
+      vflag_step = vflag;
+    }
+    bool step_tallies() const { return eflag_step || vflag_step; }
+
     // the atoms are at the step end, the forces were taken elsewhere: on
     // steps that tally energy or virial evaluate everything there (the
     // forces there replace the others; returns 1 evaluation), else bring
     // the ghosts there if observed (returns 0)
-    double at_step_end(int eflag, int vflag, bool observed);
-    bool tally_step() const;    // this step tallies energy or virial
+    double at_step_end(bool observed);
+    bool tally_step() const;    // the step about to begin tallies energy or virial
 
     // potential energy of the contributions in mask at the current
     // positions (one evaluation; the forces are kept)
@@ -117,6 +126,7 @@ namespace PEJump {
     double **xkept, **fkept;
     int nkept;    // room for this many owned atoms
     bool keeping;
+    int eflag_step, vflag_step;
     void make_room();
   };
 
