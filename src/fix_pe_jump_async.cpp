@@ -286,7 +286,15 @@ void FixPEJumpAsync::node_impulses()
   if (!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) return;
   if (watch(OtherFixes::BETWEEN_STEPS))
     note_velocity_changes(clocks->at_coarse_node() ? nullptr : &assign->fast_atoms);
-  if (!clocks->at_coarse_node()) return;
+  if (clocks->at_coarse_node()) refuse_velocity_changes();
+}
+
+/* ----------------------------------------------------------------------
+   the ranks agree whether another fix changed a velocity (global)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::refuse_velocity_changes()
+{
   int any = 0;
   MPI_Allreduce(&changes_seen, &any, 1, MPI_INT, MPI_MAX, world);
   if (any)
@@ -875,9 +883,12 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 
 void FixPEJumpAsync::final_integrate()
 {
-  if (watch(OtherFixes::INSIDE_STEP)) note_velocity_changes(&assign->fast_atoms);
-  grow_work();
   const bool coarse_end = clocks->last_fine_step();
+  // a slow atom keeps its velocity over the coarse step: a change by a fix
+  // inside any of its fine steps is still there at the last one
+  if (watch(OtherFixes::INSIDE_STEP))
+    note_velocity_changes(coarse_end ? nullptr : &assign->fast_atoms);
+  grow_work();
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the fine quadrature average itself
@@ -940,7 +951,8 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
   double **fsample = work->get(SAMPLE);
   double **fcoarse = work->get(COARSE);
   const int *slow = assign->slow(), *moving = assign->moving();
-  double *vsig = watch(OtherFixes::BETWEEN_STEPS) ? scheme->vsig() : nullptr;
+  double *vsig = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) ? scheme->vsig()
+                                                                            : nullptr;
   const double *rmass = atom->rmass;
   const double *minv = scheme->inverse_masses();
   const int *type = atom->type;
@@ -1286,6 +1298,11 @@ bool FixPEJumpAsync::watch(int when) const
 
 void FixPEJumpAsync::post_run()
 {
+  // a change in the last steps of the run has no next coarse node
+  if (watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) {
+    if (watch(OtherFixes::BETWEEN_STEPS)) note_velocity_changes(nullptr);
+    refuse_velocity_changes();
+  }
   scheme->mark_all(group_atoms());
 }
 

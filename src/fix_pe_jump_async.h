@@ -133,6 +133,7 @@ class FixPEJumpAsync : public Fix {
   void continue_scheme();
   void node_impulses();
   void note_velocity_changes(const AtomList *);
+  void refuse_velocity_changes();    // an error if another fix changed a velocity
   void open_steps();
   void check_lists();
   void finish_check(const double *local);

@@ -759,6 +759,40 @@ TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused)
 }
 
 /* ----------------------------------------------------------------------
+   fix wall/reflect changes velocities inside a step: refused whether the
+   reflected atom is on the fine clock or on the coarse one (whose
+   velocity the fix keeps over the coarse step), also when it happens in
+   the last coarse step of the run
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, WallReflectOnEitherClockIsRefused)
+{
+  const auto error_with = [](const std::string &fast, int steps) {
+    Sim s;
+    s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p f",
+            "region box block 0 10 0 10 0 10", "create_box 1 box",
+            "create_atoms 1 single 5 5 0.5", "create_atoms 1 single 2 2 8", "mass 1 1.0",
+            "pair_style lj/cut 1.0", "pair_coeff 1 1 1.0 1.0 1.0", "neighbor 0.3 bin",
+            "group fast id " + fast, "velocity all set 0 0 0", "set atom 1 vz -1.0",
+            "fix int all pe_jump/async 10 fast", "fix w all wall/reflect zlo EDGE",
+            "timestep 0.01", "thermo 0"});
+    try {
+      s.cmd(fmt::format("run {}", steps));
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      return std::string(e.what());
+    }
+    // without the refusal the atom bounced: its velocity points up
+    return fmt::format("no error, vz {}", s.lmp->atom->v[s.lmp->atom->map(1)][2]);
+  };
+  // atom 1 reaches the wall at t = 0.5 (step 50)
+  for (const std::string fast : {"1", "2"})
+    for (const int steps : {200, 60}) {
+      EXPECT_THAT(error_with(fast, steps), ContainsRegex("changed velocities during the run"))
+          << "fast group: atom " << fast << ", run " << steps;
+    }
+}
+
+/* ----------------------------------------------------------------------
    the opt-in "atom_modify first G" + "neigh_modify include G" (G holds
    the atoms on the fine clock): LAMMPS then clears the forces and checks
    the distances of the atoms of G only, the fix those of the others that
