@@ -770,12 +770,11 @@ TEST(PEJumpAsync, WallReflectOnEitherClockIsRefused)
   const auto error_with = [](const std::string &fast, int steps) {
     Sim s;
     s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p f",
-            "region box block 0 10 0 10 0 10", "create_box 1 box",
-            "create_atoms 1 single 5 5 0.5", "create_atoms 1 single 2 2 8", "mass 1 1.0",
-            "pair_style lj/cut 1.0", "pair_coeff 1 1 1.0 1.0 1.0", "neighbor 0.3 bin",
-            "group fast id " + fast, "velocity all set 0 0 0", "set atom 1 vz -1.0",
-            "fix int all pe_jump/async 10 fast", "fix w all wall/reflect zlo EDGE",
-            "timestep 0.01", "thermo 0"});
+            "region box block 0 10 0 10 0 10", "create_box 1 box", "create_atoms 1 single 5 5 0.5",
+            "create_atoms 1 single 2 2 8", "mass 1 1.0", "pair_style lj/cut 1.0",
+            "pair_coeff 1 1 1.0 1.0 1.0", "neighbor 0.3 bin", "group fast id " + fast,
+            "velocity all set 0 0 0", "set atom 1 vz -1.0", "fix int all pe_jump/async 10 fast",
+            "fix w all wall/reflect zlo EDGE", "timestep 0.01", "thermo 0"});
     try {
       s.cmd(fmt::format("run {}", steps));
     } catch (LAMMPS_NS::LAMMPSException &e) {
@@ -1173,4 +1172,37 @@ TEST(PEJumpAsync, FastAutoRestartIsExact)
     worst = std::max(worst, std::fabs(d - prd[n % 3] * std::round(d / prd[n % 3])));
   }
   EXPECT_LT(worst, 1e-13);    // the restart sorts the atoms: round-off
+}
+
+/* ----------------------------------------------------------------------
+   the fine step may change inside a coarse step (timestep between runs,
+   fix dt/reset): the coarse step is then the sum of its K fine steps, and
+   the pseudo-energy stays conserved at the coarse nodes for an exact rule
+   (lobatto 3 on the quartic chain, as in PseudoEnergyConservedAtCoarseNodes)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, StepChangesInsideCoarseStepsKeepThePseudoEnergy)
+{
+  for (const std::string how : {"timestep", "dt/reset"}) {
+    Sim s;
+    chain(s);
+    s.cmds({"fix 1 chain pe_jump/async 10 fast quadrature lobatto 3", "timestep 2e-4", "thermo 0",
+            "run 0 post no"});
+    const double h0 = s.eval("c_thermo_pe+f_1");
+    if (how == "dt/reset") s.cmd("fix dt all dt/reset 3 1e-4 3e-4 0.00002 units box");
+    double worst = 0.0, smallest = 2e-4, largest = 2e-4;
+    for (int n = 0; n < 200; ++n) {
+      // runs of 7 steps: the changes fall inside coarse steps of 10
+      if (how == "timestep") s.cmd(fmt::format("timestep {}", (n % 3 == 0) ? 1.5e-4 : 2.5e-4));
+      s.cmd(how == "timestep" ? "run 7 pre no post no" : "run 7 post no");
+      smallest = std::min(smallest, s.lmp->update->dt);
+      largest = std::max(largest, s.lmp->update->dt);
+      if (s.lmp->update->ntimestep % 10 == 0)
+        worst = std::max(worst, std::fabs(s.eval("c_thermo_pe+f_1") - h0));
+    }
+    EXPECT_LT(largest / smallest, 10.0) << how;
+    EXPECT_GT(largest / smallest, 1.4) << how;    // the step did change
+    // 1400 fine steps; the constant step gives 1.2e-14
+    EXPECT_LT(worst / std::fabs(h0), 1e-13) << how;
+  }
 }
