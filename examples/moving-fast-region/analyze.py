@@ -48,7 +48,7 @@ SCENES = {
     "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
                 "async-dyn-r12", "async-auto", "async-fastauto",
                 "async-fastauto-tol0.1", "async-fastauto-tol0.2"], "ref", "E0"),
-    "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
+    "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn", "async-dyn-r3",
                  "async-auto", "async-auto-k2", "async-fastauto",
                  "async-fastauto-b1", "async-fastauto-tol0.1",
                  "async-fastauto-tol0.2"], "ref", "Epka"),

@@ -59,6 +59,7 @@ run impact async-dyn      -var integrator async -var K 10 -var fast dynamic -var
 run impact async-dyn-r12  -var integrator async -var K 10 -var fast dynamic -var R 12.0 -var every 100000
 run impact async-auto     -var integrator async -var K 10 -var fast auto -var kthr 0.01 -var every 100000 -var skin 0.5
 run cascade async-dyn     -var integrator async -var K 10 -var fast dynamic -var R 4.0  -var every 100000
+run cascade async-dyn-r3  -var integrator async -var K 10 -var fast dynamic -var R 3.0  -var every 100000
 run cascade async-auto    -var integrator async -var K 10 -var fast auto -var kthr 2.0 -var every 100000
 run crack async-dyn-k5    -var integrator async -var K 5  -var fast dynamic -var R 10.0 -var every 100000
 run cascade async-auto-k2 -var integrator async -var K 2  -var fast auto -var kthr 2.0 -var every 100000
