@@ -630,7 +630,7 @@ void FixPEJump::tally_at_node()
 void FixPEJump::post_run()
 {
   // the velocities as the run leaves them, for the next run to compare
-  scheme->mark_all(group_atoms());
+  scheme->end_run(group_atoms());
 
   if (automatic) automatic->report(style);
 }

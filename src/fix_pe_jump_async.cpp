@@ -1303,7 +1303,7 @@ void FixPEJumpAsync::post_run()
     if (watch(OtherFixes::BETWEEN_STEPS)) note_velocity_changes(nullptr);
     refuse_velocity_changes();
   }
-  scheme->mark_all(group_atoms());
+  scheme->end_run(group_atoms());
 }
 
 /* ---------------------------------------------------------------------- */

@@ -28,7 +28,8 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
-    Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}
+    Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0},
+    count_at_end(-1)
 {
   JUMP = state.add("jump", 3, 0.0);
   VSIG = state.add("vsig", 1, 0.0);
@@ -103,6 +104,17 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style)
                    "(written with other settings or by another version): the two-step scheme "
                    "restarts from the current state\n",
                    style);
+  const bigint now = count(set);
+  if ((all_started > 0) && (now < count_at_end)) {
+    all_started = 0;
+    if (comm->me == 0)
+      utils::logmesg(lmp,
+                     "Fix {}: {} atoms of the group were deleted (or left it) since the last "
+                     "run: the two-step scheme restarts from the current positions and "
+                     "velocities\n",
+                     style, count_at_end - now);
+  }
+  count_at_end = -1;
 
   // velocities that are not finite (a velocity command gone wrong, e.g.
   // velocity scale to a negative temperature) would only show up later
@@ -205,6 +217,26 @@ void TwoStep::mark_all(const AtomSet &set) const
   set.each(atom->mask, atom->nlocal, [&](int i) {
     sig[i] = velocity_fingerprint(v[i]);
   });
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::end_run(const AtomSet &set)
+{
+  mark_all(set);
+  count_at_end = count(set);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bigint TwoStep::count(const AtomSet &set) const
+{
+  bigint local = 0, global = 0;
+  set.each(atom->mask, atom->nlocal, [&](int) {
+    ++local;
+  });
+  MPI_Allreduce(&local, &global, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  return global;
 }
 
 /* ---------------------------------------------------------------------- */

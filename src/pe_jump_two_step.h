@@ -49,8 +49,13 @@ namespace PEJump {
     double inverse_mass_of(int i) const;
 
     // the ranks agree on started (restart data that does not fit, marked
-    // -1, is told); non-finite velocities are refused
+    // -1, is told; so are atoms of the group deleted since the last run,
+    // whose partners' jumps hold forces that are gone: not started);
+    // non-finite velocities are refused
     void agree_on_started(const AtomSet &, const char *style);
+    // the end of a run: the fingerprints of the velocities and the number
+    // of atoms in the group, for the next run to compare
+    void end_run(const AtomSet &);
 
     // [v]^0 = step(i) F/m: the initial kick (scale 1) or none (scale 0)
     void start(const AtomSet &, double **f, double scale, const std::function<double(int)> &step);
@@ -115,6 +120,8 @@ namespace PEJump {
     std::vector<double> inverse_mass;
     bigint cached_step;
     double cached[2];
+    bigint count_at_end;    // atoms of the group at the end of the last run (-1: none)
+    bigint count(const AtomSet &) const;    // global
   };
 
 }    // namespace PEJump

@@ -600,6 +600,43 @@ TEST(PEJump, VelocityChangeRestartsSchemeWithLogMessage)
 }
 
 /* ----------------------------------------------------------------------
+   atoms deleted between runs: the jumps of their partners hold forces of
+   interactions that are gone; the scheme restarts (log message), and the
+   total momentum stays what it was, as with fix nve (with the stale jumps
+   it changed by about 1e-2). Both fixes; for pe_jump/async the deletion
+   falls on a coarse node and inside a coarse step
+------------------------------------------------------------------------- */
+
+TEST(PEJump, DeletedAtomsRestartTheScheme)
+{
+  const auto momentum = [](Sim &s) {
+    return std::vector<double>{s.eval("vcm(all,x)*mass(all)"), s.eval("vcm(all,y)*mass(all)"),
+                               s.eval("vcm(all,z)*mass(all)")};
+  };
+  for (const std::string fix :
+       {"fix 1 all nve", "fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
+        "fix 1 all pe_jump/async 5 fast", "fix 1 all pe_jump/async 5 fast quadrature lobatto 3"}) {
+    for (const int first : {505, 503}) {
+      Sim s(MPI_COMM_WORLD, false);
+      lj_liquid(s);
+      s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f", fix,
+              "timestep 0.002", "thermo 0", fmt::format("run {} post no", first),
+              "region gone sphere 5.5 5.5 5.5 0.8 units box", "delete_atoms region gone"});
+      ASSERT_LT(s.lmp->atom->natoms, 256) << fix;
+      ::testing::internal::CaptureStdout();
+      s.cmd("run 0 post no");
+      const std::string out = ::testing::internal::GetCapturedStdout();
+      if (fix.find("pe_jump") != std::string::npos)
+        EXPECT_THAT(out, ContainsRegex("atoms of the group were deleted")) << fix;
+      const auto before = momentum(s);
+      s.cmd("run 20 post no");
+      const auto after = momentum(s);
+      EXPECT_LT(max_diff(before, after), 1e-12) << fix << ", deleted after step " << first;
+    }
+  }
+}
+
+/* ----------------------------------------------------------------------
    cost: evaluations per step, checked against a pair style that counts
    its own compute() calls
 ------------------------------------------------------------------------- */
