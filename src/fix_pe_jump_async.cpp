@@ -277,8 +277,9 @@ void FixPEJumpAsync::setup_post_neighbor()
    fix pe_jump takes a velocity that another fix changed as an impulse;
    here a slow atom has no node velocity inside a coarse step, so such
    changes are refused. The atoms on the fine clock are checked every fine
-   step (before their steps begin, and before they jump), all atoms at
-   coarse nodes, where the ranks agree on the outcome.
+   step (before their steps begin, and before they jump), all atoms at the
+   last fine step of a coarse step and at coarse nodes, where the ranks
+   agree on the outcome (and at the end of a run).
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::node_impulses()
@@ -532,11 +533,11 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 }
 
 /* ----------------------------------------------------------------------
-   a dynamic fast group: atoms change clock at coarse nodes, where every
-   atom is at its node q^n with its node velocity v^n, which it keeps. Its
-   jump, whose smooth part is h a for steps h, is scaled to the new step;
-   then the interactions are split again, the atoms sorted by clock again,
-   and (Lobatto rules) the start-node forces of both subsets taken at q^n
+   a dynamic fast group or fast auto: atoms change clock at coarse nodes,
+   where every atom is at its node q^n with its node velocity v^n, which it
+   keeps. The interactions are split again and the atoms sorted by clock
+   again; the atoms that changed restart their jumps with the kick of the
+   new step (restart_jumps()), from the forces at q^n
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::change_clocks()
@@ -927,7 +928,7 @@ void FixPEJumpAsync::final_integrate()
   scheme->forget_energies();
 
   // the labels are output only: take them where something looks, when
-  // tally_at_node() has brought the ghosts to the node
+  // at_step_end() has brought the ghosts to the node
   if (coarse_end && (nodes->step_tallies() || others->step_observed()))
     classes->label(*split, *assign, groupbit);
 }
