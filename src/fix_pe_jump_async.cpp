@@ -544,8 +544,19 @@ void FixPEJumpAsync::change_clocks()
 {
   std::vector<int> to_fine, chosen;
   if (opts.fast_auto > 0.0) choose_fast(chosen);
-  const bool changed = assign->follow(*split, to_fine, chosen.empty() ? nullptr : &chosen);
-  if (changed || !split->up_to_date()) {
+  const std::vector<int> *picked = chosen.empty() ? nullptr : &chosen;
+  const bool due = assign->due(picked);
+  // the midpoint rule takes the forces at the node from FINE subsets, the
+  // first one of the old clocks (those who leave the fine clock), if two of
+  // them cost less than a complete evaluation
+  const bool by_subsets = due && !rule->has_end_nodes() && split->up_to_date() &&
+      (split->fraction(InteractionSplit::FINE) < 0.5);
+  if (by_subsets) {
+    grow_work();
+    evals_total += fine_forces_at_node(work->get(COARSE), nullptr);
+  }
+  const bool changed = due && assign->follow(*split, to_fine, picked);
+  if (due || !split->up_to_date()) {
     split->build();
     assign->find_slow(*split);
     if (assign->find_moving(*split, *clocks, free_flight())) comm->forward_comm();
@@ -554,7 +565,8 @@ void FixPEJumpAsync::change_clocks()
   if (!changed) return;
   // the forces at the node: with a Lobatto rule the start nodes of both
   // subsets are taken anew, and an atom's force is their sum (an
-  // interaction of a fine-clock atom is a fine one), else one evaluation
+  // interaction of a fine-clock atom is a fine one), else the FINE subset
+  // of the new clocks for those who join the fine clock
   if (rule->has_end_nodes()) {
     store_start_node();
     grow_work();
@@ -564,15 +576,52 @@ void FixPEJumpAsync::change_clocks()
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) total[i][k] = fstart[i][k] + fstart_coarse[i][k];
     restart_jumps(to_fine, total);
+    evals_total += 1.0;
+  } else if (by_subsets) {
+    evals_total += fine_forces_at_node(work->get(COARSE), &to_fine);
+    restart_jumps(to_fine, work->get(COARSE));
   } else {
     NodeSampler::Keep keep(*nodes);
     sampler->compute(ForceSampler::ALL, 0, 0);
     restart_jumps(to_fine, atom->f);
+    evals_total += 1.0;
   }
-  evals_total += 1.0;
   guard->forget_stats();
   slow_magnitudes();
   classes->label(*split, *assign, groupbit);
+}
+
+/* ----------------------------------------------------------------------
+   midpoint rule at a clock change: the forces at the node q^n of the atoms
+   that change clock (rows of fnode; the work array of the coarse sum is
+   free between coarse steps) without a complete evaluation. Every
+   interaction of an atom on the fine clock is in the FINE subset, so its
+   force from that subset is complete, summed in the same order. With the
+   old clocks: rows of every atom on the fine clock (among them those who
+   leave it); with the new ones (to_fine): rows of those who joined it.
+   Returns the cost in evaluations
+------------------------------------------------------------------------- */
+
+double FixPEJumpAsync::fine_forces_at_node(double **fnode, const std::vector<int> *to_fine)
+{
+  const int nlocal = atom->nlocal;
+  const auto wanted = [&](int i) {
+    return to_fine ? ((*to_fine)[i] > 0) : (split->fine(i) != 0);
+  };
+  int local = 0, any = 0;
+  for (int i = 0; i < nlocal && !local; i++) local = wanted(i) ? 1 : 0;
+  MPI_Allreduce(&local, &any, 1, MPI_INT, MPI_MAX, world);
+  if (!any) return 0.0;
+
+  NodeSampler::Keep keep(*nodes);
+  split->activate(InteractionSplit::FINE);
+  sampler->compute(ForceSampler::ALL, 0, 0);
+  split->restore();
+  double **f = atom->f;
+  for (int i = 0; i < nlocal; i++)
+    if (wanted(i))
+      for (int k = 0; k < 3; k++) fnode[i][k] = f[i][k];
+  return split->fraction(InteractionSplit::FINE);
 }
 
 /* ----------------------------------------------------------------------

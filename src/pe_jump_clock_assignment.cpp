@@ -167,14 +167,12 @@ void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *ch
 }
 
 /* ----------------------------------------------------------------------
-   at a coarse node: a dynamic fast group that changed since the last
-   assignment gives a new one; to_fine[i] (owned atoms) tells the atoms
-   that changed clock (1: to the fine clock, -1: to the coarse clock).
-   Returns true if any atom changed clock (global).
+   at a coarse node: true if a dynamic fast group (evaluated at the node) or
+   the atoms chosen by the fix differ from those of the last assignment
+   (global)
 ------------------------------------------------------------------------- */
 
-bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
-                             const std::vector<int> *chosen)
+bool ClockAssignment::due(const std::vector<int> *chosen)
 {
   if (!dynamic && !automatic) return false;
   // the group's criterion at the node positions: the group's own updates,
@@ -183,8 +181,18 @@ bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
   if (criterion) criterion->setup(0);
   double now[2];
   fast_signature(now, chosen);
-  if ((now[0] == fast_seen[0]) && (now[1] == fast_seen[1])) return false;
+  return (now[0] != fast_seen[0]) || (now[1] != fast_seen[1]);
+}
 
+/* ----------------------------------------------------------------------
+   after due(): the new assignment; to_fine[i] (owned atoms) tells the atoms
+   that changed clock (1: to the fine clock, -1: to the coarse clock).
+   Returns true if any atom changed clock (global).
+------------------------------------------------------------------------- */
+
+bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
+                             const std::vector<int> *chosen)
+{
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   to_fine.assign(nlocal, 0);

@@ -1059,6 +1059,80 @@ TEST(PEJumpAsync, ClockChangesConserveMomentum)
 }
 
 /* ----------------------------------------------------------------------
+   an atom that changes clock at a coarse node starts its new clock with
+   the kick of the scheme, [v]^n = h_new F(q^n)/m, less one common shift
+   (the mean that keeps the momentum): its first free flight x^n + h (v^n +
+   [v]^n/2) gives the kick, which is compared with the forces at the node
+   computed from scratch. With the midpoint rule the forces of the atoms
+   that change clock come from two fine subsets, at less than the cost of
+   one complete evaluation
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
+{
+  const double h = 0.005;
+  for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
+    Sim s;
+    moving_region(s, rule);
+    s.cmd("variable xc equal 2.0+3.0*(step>200)");    // many atoms change at step 200's node
+    // the node of step 200 (positions, velocities, classes) and the
+    // cumulative evaluations of every step, in one run
+    s.cmds(
+        {"fix node all store/state 200 x y vx vy f_1", "fix evals all vector 1 f_1[5]", "run 201"});
+    const int natoms = static_cast<int>(s.lmp->atom->natoms);
+    const auto *atom = s.lmp->atom;
+    double **node = s.lmp->modify->get_fix_by_id("node")->array_atom;
+    std::vector<double> x0(3 * (natoms + 1)), v0(3 * (natoms + 1));
+    std::vector<int> fine0(natoms + 1);
+    for (int i = 0; i < atom->nlocal; i++) {
+      const int id = static_cast<int>(atom->tag[i]);
+      for (int k = 0; k < 2; k++) {
+        x0[3 * id + k] = node[i][k];
+        v0[3 * id + k] = node[i][2 + k];
+      }
+      fine0[id] = (node[i][4] > 0.0) ? 1 : 0;
+    }
+    auto *cumulative = s.lmp->modify->get_fix_by_id("evals");
+    const int stored = cumulative->size_vector;
+    const double evals =
+        cumulative->compute_vector(stored - 1) - cumulative->compute_vector(stored - 2);
+    const auto fine1 = on_fine_clock(s);
+
+    // the forces at the node, from scratch
+    Sim r;
+    moving_region(r, "");
+    r.cmds({"unfix 1", "fix 1 all nve"});
+    for (int id = 1; id <= natoms; id++)
+      for (int k = 0; k < 2; k++) r.lmp->atom->x[r.lmp->atom->map(id)][k] = x0[3 * id + k];
+    r.cmds({"run 0 post no"});
+
+    const double *prd = s.lmp->domain->prd;
+    double shift[3] = {0.0, 0.0, 0.0}, spread = 0.0, largest = 0.0;
+    int changed = 0;
+    for (int id = 1; id <= natoms; id++) {
+      if (fine0[id] == fine1[id]) continue;
+      const double step = fine1[id] ? h : 10.0 * h;
+      for (int k = 0; k < 2; k++) {
+        double d = s.x(id, k) - x0[3 * id + k];
+        d -= prd[k] * std::round(d / prd[k]);
+        const double jump = 2.0 * (d / h - v0[3 * id + k]);
+        const double kick = step * r.lmp->atom->f[r.lmp->atom->map(id)][k];
+        if (!changed) shift[k] = jump - kick;
+        spread = std::max(spread, std::fabs(jump - kick - shift[k]));
+        largest = std::max(largest, std::fabs(kick));
+      }
+      ++changed;
+    }
+    EXPECT_GT(changed, 3) << rule;
+    EXPECT_GT(largest, 1e-4) << rule;
+    EXPECT_LT(spread, 1e-10) << rule;
+    // the forces at the node cost less than a complete evaluation on top
+    // of the step's own
+    if (rule.find("lobatto") == std::string::npos) EXPECT_LT(evals - s.vec("1", 3), 1.0) << rule;
+  }
+}
+
+/* ----------------------------------------------------------------------
    a run continued from a restart file written at a coarse node, with the
    region moving on, gives the unbroken run's trajectory: the fine clock
    (a group of the fix) and the clocks' state are in the restart file
