@@ -466,6 +466,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   scheme->fresh = 0;
   changes_seen = 0;
   opened_ahead = 0;
+  assign->start_run();
   check_clocks();
 
   grow_work();
@@ -1354,6 +1355,7 @@ void FixPEJumpAsync::post_run()
     refuse_velocity_changes();
   }
   scheme->end_run(group_atoms());
+  assign->report(style);
 }
 
 /* ---------------------------------------------------------------------- */

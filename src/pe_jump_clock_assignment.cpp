@@ -32,7 +32,8 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int 
                                  bool chooses) :
     Pointers(lmp),
     fix(owner), fast_group(fast), layers(nlayers), finebit(0), clockbit(0), dynamic(false),
-    automatic(chooses), saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
+    automatic(chooses),
+    saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0}, tally{0, 0, 0},
     reverse_flags(nullptr)
 {
   const int ifast = group->find(fast_group);
@@ -175,6 +176,7 @@ void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *ch
 bool ClockAssignment::due(const std::vector<int> *chosen)
 {
   if (!dynamic && !automatic) return false;
+  ++tally[NODES];
   // the group's criterion at the node positions: the group's own updates,
   // in the middle of a step, see atoms between their nodes
   Fix *criterion = dynamic ? modify->get_fix_by_id("GROUP_" + fast_group) : nullptr;
@@ -198,16 +200,29 @@ bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
   to_fine.assign(nlocal, 0);
   for (int i = 0; i < nlocal; i++) to_fine[i] = (mask[i] & clockbit) ? 1 : 0;
   assign(split, chosen);
-  int any = 0;
+  bigint local = 0;
   for (int i = 0; i < nlocal; i++) {
     const int fine = (mask[i] & clockbit) ? 1 : 0;
     to_fine[i] = fine - to_fine[i];
-    if (to_fine[i]) any = 1;
+    if (to_fine[i]) ++local;
   }
-  int global = 0;
-  MPI_Allreduce(&any, &global, 1, MPI_INT, MPI_MAX, world);
+  bigint moved = 0;
+  MPI_Allreduce(&local, &moved, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  tally[ATOMS] += moved;
+  if (moved) ++tally[CHANGED];
   changed();    // the state of the atoms is carried over: it fits this fine clock
-  return global != 0;
+  return moved != 0;
+}
+
+/* ----------------------------------------------------------------------
+   the clock changes of the run, in the log
+------------------------------------------------------------------------- */
+
+void ClockAssignment::report(const char *style) const
+{
+  if (follows_group() && (comm->me == 0))
+    utils::logmesg(lmp, "Fix {}: {} atoms changed clock at {} of {} coarse nodes\n", style,
+                   tally[ATOMS], tally[CHANGED], tally[NODES]);
 }
 
 /* ----------------------------------------------------------------------

@@ -55,6 +55,10 @@ namespace PEJump {
     bool due(const std::vector<int> *chosen);
     bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
     bool follows_group() const { return dynamic || automatic; }
+    // the clock changes of a run (atoms, coarse nodes with a change, coarse
+    // nodes looked at): counted from start_run(), reported in the log
+    void start_run() { tally[ATOMS] = tally[CHANGED] = tally[NODES] = 0; }
+    void report(const char *style) const;
     const std::string &fast_group_name() const { return fast_group; }
     // true if the atoms on the fine clock changed since the last call (global)
     bool changed();
@@ -90,11 +94,13 @@ namespace PEJump {
     Fix *fix;
     std::string fast_group;
     int layers, finebit, clockbit;
-    bool dynamic;                       // the fast group is dynamic
-    bool automatic;                     // the fix adds atoms to the fast group
-    int saved_layers;                   // buffer layers of the last run (or restart file)
-    double saved_clock[2];              // fine-clock atoms of the last run: number, sum of IDs
-    double fast_seen[2];                // fast group at the last assignment: number, sum of IDs
+    bool dynamic;             // the fast group is dynamic
+    bool automatic;           // the fix adds atoms to the fast group
+    int saved_layers;         // buffer layers of the last run (or restart file)
+    double saved_clock[2];    // fine-clock atoms of the last run: number, sum of IDs
+    double fast_seen[2];      // fast group at the last assignment: number, sum of IDs
+    enum { ATOMS, CHANGED, NODES };
+    bigint tally[3];                    // clock changes of the run (see start_run)
     std::vector<int> slow_flag;         // owned atoms: 1 if on the coarse clock
     std::vector<int> moving_flag;       // owned atoms: 1 if they move on fine steps
     std::vector<int> participant;       // owned and ghost atoms: in a fine interaction

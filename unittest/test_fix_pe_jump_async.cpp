@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <regex>
 
 using namespace PEJumpTest;
 using ::testing::ContainsRegex;
@@ -1072,13 +1073,15 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
 {
   const double h = 0.005;
   for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
-    Sim s;
+    Sim s(MPI_COMM_WORLD, false);
     moving_region(s, rule);
-    s.cmd("variable xc equal 2.0+3.0*(step>200)");    // many atoms change at step 200's node
+    s.cmds({"variable xc equal 2.0+3.0*(step>200)", "thermo 0"});    // changes at node 200
     // the node of step 200 (positions, velocities, classes) and the
     // cumulative evaluations of every step, in one run
-    s.cmds(
-        {"fix node all store/state 200 x y vx vy f_1", "fix evals all vector 1 f_1[5]", "run 201"});
+    s.cmds({"fix node all store/state 200 x y vx vy f_1", "fix evals all vector 1 f_1[5]"});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 201");
+    const std::string log = ::testing::internal::GetCapturedStdout();
     const int natoms = static_cast<int>(s.lmp->atom->natoms);
     const auto *atom = s.lmp->atom;
     double **node = s.lmp->modify->get_fix_by_id("node")->array_atom;
@@ -1124,6 +1127,16 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
       ++changed;
     }
     EXPECT_GT(changed, 3) << rule;
+    // the fix's count of clock changes in the log: those at node 200 and a
+    // few of thermal motion at the region's boundary before
+    std::smatch count;
+    ASSERT_TRUE(std::regex_search(
+        log, count,
+        std::regex("Fix pe_jump/async: (\\d+) atoms changed clock at (\\d+) of 21 coarse nodes")))
+        << rule;
+    EXPECT_GE(std::stoi(count[1]), changed) << rule;
+    EXPECT_LE(std::stoi(count[1]), changed + 5) << rule;
+    EXPECT_GE(std::stoi(count[2]), 1) << rule;
     EXPECT_GT(largest, 1e-4) << rule;
     EXPECT_LT(spread, 1e-10) << rule;
     // the forces at the node cost less than a complete evaluation on top

@@ -59,7 +59,7 @@ def parse_log(path):
     """Thermo columns of the last run, loop time, steps, the SCENE line and
     the variables given on the command line / in the log."""
     cols, rows, loop, steps, scene = None, [], None, None, None
-    epka = None
+    epka, changes = None, None
     with open(path) as f:
         lines = f.readlines()
     in_thermo = False
@@ -68,12 +68,16 @@ def parse_log(path):
         if s and s[0] == "Step":
             cols, rows, in_thermo = s, [], True
             continue
+        if line.startswith("Loop time"):
+            in_thermo = False
+            m = re.search(r"Loop time of (\S+) on .* for (\d+) steps", line)
+            loop, steps = float(m.group(1)), int(m.group(2))
+            continue
+        m = re.match(r"Fix pe_jump/async: (\d+) atoms changed clock at (\d+) of (\d+) coarse nodes",
+                     line)
+        if m:
+            changes = [int(g) for g in m.groups()]
         if in_thermo:
-            if line.startswith("Loop time"):
-                in_thermo = False
-                m = re.search(r"Loop time of (\S+) on .* for (\d+) steps", line)
-                loop, steps = float(m.group(1)), int(m.group(2))
-                continue
             try:
                 vals = [float(v) for v in s]
             except ValueError:
@@ -92,6 +96,7 @@ def parse_log(path):
     kasync = next((int(m.group(1)) for m in (re.search(r"pe_jump/async\s+(\d+)\s", l)
                                                for l in lines) if m), None)
     return {"cols": data, "loop": loop, "steps": steps, "scene": scene, "epka": epka, "K": kasync,
+            "changes": changes,
             "error": next((l.strip() for l in lines if l.startswith("ERROR")), None)}
 
 
@@ -232,11 +237,11 @@ def analyze_scene(scene, runs, ref_name, escale, date, out_md):
             cells += [f("vac", "%d"), f("inter", "%d"), f("off", "%d"), f("vac_not_ref", "%d")]
         lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
-    # dynamic fast groups: clock changes and the pseudo-energy (thermo columns
-    # f_clk[1], f_clk[2] = running means over the coarse nodes of the number
-    # of fine-clock atoms and of the atoms that changed clock)
-    clk = [n for n in runs if n in logs and "f_clk[1]" in logs[n]["cols"]
-           and len(logs[n]["cols"]["f_clk[1]"])]
+    # dynamic fast groups: clock changes and the pseudo-energy (thermo column
+    # f_clk = running mean over the coarse nodes of the number of fine-clock
+    # atoms; the fix's log line "N atoms changed clock at C of M coarse nodes")
+    clk = [n for n in runs if n in logs and "f_clk" in logs[n]["cols"]
+           and len(logs[n]["cols"]["f_clk"])]
     if clk:
         lines += [f"clock changes ({scene}; static async for comparison; 'end' = last thermo line,"
                   " the step of the failure for unstable runs)", "",
@@ -249,8 +254,8 @@ def analyze_scene(scene, runs, ref_name, escale, date, out_md):
             c = L["cols"]
             E, Ht = c["v_E"], c.get("v_Ht", c["v_E"])
             scale = L["epka"] if escale == "Epka" else abs(E[0])
-            nf = "%.1f" % c["f_clk[1]"][-1] if "f_clk[1]" in c else "%d" % int(c["v_nfast"][0])
-            ch = "%.2f" % c["f_clk[2]"][-1] if "f_clk[2]" in c else "0"
+            nf = "%.1f" % c["f_clk"][-1] if "f_clk" in c else "%d" % int(c["v_nfast"][0])
+            ch = "%.2f" % (L["changes"][0] / L["changes"][2]) if L["changes"] else "0"
             err = L["error"]
             status = "ok"
             if err:
