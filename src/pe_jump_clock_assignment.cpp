@@ -23,6 +23,8 @@
 #include "pe_jump_atom_state.h"
 #include "pe_jump_interaction_split.h"
 
+#include <cstdint>
+
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
 
@@ -241,35 +243,62 @@ bigint ClockAssignment::fast_off_clock() const
 }
 
 /* ----------------------------------------------------------------------
-   the atoms of the fast group in the fix group: number, sum of IDs
+   a set of atoms is told by its number and the sum of a 64-bit mix of the
+   IDs (the finalizer of splitmix64), summed modulo 2^64, so that the sum
+   does not depend on the order and two sets collide with a chance of
+   about 2^-53 (a plain sum of IDs cannot tell 10 + 13 from 11 + 12)
+------------------------------------------------------------------------- */
+
+namespace {
+uint64_t mixed_id(tagint id)
+{
+  uint64_t z = static_cast<uint64_t>(id) + 0x9E3779B97F4A7C15ULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+template <typename In> void id_signature(const Atom *atom, MPI_Comm world, In in, double *sig)
+{
+  unsigned long long local[2] = {0, 0}, all[2];
+  for (int i = 0; i < atom->nlocal; i++)
+    if (in(i)) {
+      ++local[0];
+      local[1] += mixed_id(atom->tag[i]);
+    }
+  MPI_Allreduce(local, all, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, world);
+  sig[0] = static_cast<double>(all[0]);
+  sig[1] = static_cast<double>(all[1] >> 11);    // 53 bits: exact in a double
+}
+}    // namespace
+
+/* ----------------------------------------------------------------------
+   the atoms of the fast group in the fix group (and those chosen)
 ------------------------------------------------------------------------- */
 
 void ClockAssignment::fast_signature(double *sig, const std::vector<int> *chosen) const
 {
-  double local[2] = {0.0, 0.0};
   const int *mask = atom->mask;
-  const tagint *tag = atom->tag;
-  for (int i = 0; i < atom->nlocal; i++)
-    if (((mask[i] & finebit) || (chosen && (*chosen)[i])) && (mask[i] & fix->groupbit)) {
-      local[0] += 1.0;
-      local[1] += static_cast<double>(tag[i]);
-    }
-  MPI_Allreduce(local, sig, 2, MPI_DOUBLE, MPI_SUM, world);
+  id_signature(
+      atom, world,
+      [&](int i) {
+        return ((mask[i] & finebit) || (chosen && (*chosen)[i])) && (mask[i] & fix->groupbit);
+      },
+      sig);
 }
 
 /* ---------------------------------------------------------------------- */
 
 bool ClockAssignment::changed()
 {
-  double local[2] = {0.0, 0.0}, clock[2];
   const int *mask = atom->mask;
-  const tagint *tag = atom->tag;
-  for (int i = 0; i < atom->nlocal; i++)
-    if ((mask[i] & fix->groupbit) && (mask[i] & clockbit)) {
-      local[0] += 1.0;
-      local[1] += static_cast<double>(tag[i]);
-    }
-  MPI_Allreduce(local, clock, 2, MPI_DOUBLE, MPI_SUM, world);
+  double clock[2];
+  id_signature(
+      atom, world,
+      [&](int i) {
+        return (mask[i] & fix->groupbit) && (mask[i] & clockbit);
+      },
+      clock);
   const bool differ = (clock[0] != saved_clock[0]) || (clock[1] != saved_clock[1]);
   saved_clock[0] = clock[0];
   saved_clock[1] = clock[1];

@@ -76,7 +76,7 @@ namespace PEJump {
     AtomList slow_moving;     // and the slow ones in a fine interaction
     AtomList slow_atoms;      // the atoms of the group on the coarse clock
 
-    // restart: buffer layers and fine-clock atoms (number, sum of IDs) of
+    // restart: buffer layers and fine-clock atoms (number, ID hash) of
     // the last run (3 values)
     void save(double *list) const;
     void restore(const double *list);
@@ -97,8 +97,8 @@ namespace PEJump {
     bool dynamic;             // the fast group is dynamic
     bool automatic;           // the fix adds atoms to the fast group
     int saved_layers;         // buffer layers of the last run (or restart file)
-    double saved_clock[2];    // fine-clock atoms of the last run: number, sum of IDs
-    double fast_seen[2];      // fast group at the last assignment: number, sum of IDs
+    double saved_clock[2];    // fine-clock atoms of the last run: number, ID hash
+    double fast_seen[2];      // fast group at the last assignment: number, ID hash
     enum { ATOMS, CHANGED, NODES };
     bigint tally[3];                    // clock changes of the run (see start_run)
     std::vector<int> slow_flag;         // owned atoms: 1 if on the coarse clock

@@ -1146,6 +1146,23 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
 }
 
 /* ----------------------------------------------------------------------
+   a dynamic fast group that swaps atoms for others with the same number
+   and the same sum of IDs (10 and 13 for 11 and 12) changes the clocks
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, ClocksFollowAGroupThatKeepsItsSizeAndIDSum)
+{
+  Sim s;
+  moving_region(s, "");
+  s.cmds({"variable swap atom (step<=100)*(id==10||id==13)+(step>100)*(id==11||id==12)",
+          "group pair dynamic all var swap every 100000", "unfix 1",
+          "fix 1 all pe_jump/async 10 pair", "run 200"});
+  const auto fine = on_fine_clock(s);
+  EXPECT_EQ(fine[10] + fine[13], 0);
+  EXPECT_EQ(fine[11] + fine[12], 2);
+}
+
+/* ----------------------------------------------------------------------
    a run continued from a restart file written at a coarse node, with the
    region moving on, gives the unbroken run's trajectory: the fine clock
    (a group of the fix) and the clocks' state are in the restart file
