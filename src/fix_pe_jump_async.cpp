@@ -546,7 +546,8 @@ void FixPEJumpAsync::change_clocks()
   std::vector<int> to_fine, chosen;
   if (opts.fast_auto > 0.0) choose_fast(chosen);
   const std::vector<int> *picked = chosen.empty() ? nullptr : &chosen;
-  const bool due = assign->due(picked);
+  // (initial_integrate() of the step after the node)
+  const bool due = assign->due(picked, update->ntimestep - 1, clocks->steps());
   // the midpoint rule takes the forces at the node from FINE subsets, the
   // first one of the old clocks (those who leave the fine clock), if two of
   // them cost less than a complete evaluation

@@ -170,19 +170,27 @@ void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *ch
 }
 
 /* ----------------------------------------------------------------------
-   at a coarse node: true if a dynamic fast group (evaluated at the node) or
-   the atoms chosen by the fix differ from those of the last assignment
-   (global)
+   at the coarse node of step node (the one before it steps earlier): true
+   if a dynamic fast group or the atoms chosen by the fix differ from those
+   of the last assignment (global). The group's criterion is evaluated
+   again at the node positions at the first coarse node after each of the
+   group's own updates (every nevery steps), so that the clocks follow
+   the group as often as it is updated; the group's own updates, in the
+   middle of a step, see atoms between their nodes
 ------------------------------------------------------------------------- */
 
-bool ClockAssignment::due(const std::vector<int> *chosen)
+bool ClockAssignment::due(const std::vector<int> *chosen, bigint node, int steps)
 {
   if (!dynamic && !automatic) return false;
   ++tally[NODES];
-  // the group's criterion at the node positions: the group's own updates,
-  // in the middle of a step, see atoms between their nodes
   Fix *criterion = dynamic ? modify->get_fix_by_id("GROUP_" + fast_group) : nullptr;
-  if (criterion) criterion->setup(0);
+  const auto updates = [&](bigint step) {    // updates of the group up to step
+    const bigint every = criterion->nevery;
+    return (step >= 0) ? step / every : -((every - 1 - step) / every);
+  };
+  const bool evaluate = criterion && (updates(node) != updates(node - steps));
+  if (evaluate) criterion->setup(0);
+  if (!evaluate && !automatic) return false;
   double now[2];
   fast_signature(now, chosen);
   return (now[0] != fast_seen[0]) || (now[1] != fast_seen[1]);

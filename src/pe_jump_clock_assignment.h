@@ -47,12 +47,13 @@ namespace PEJump {
     // group has atoms off the fine clock (redefined); true if done
     bool assign_buffer(bool started, InteractionSplit &);
     // a dynamic fast group, or atoms chosen by the fix (chosen[i] = 1,
-    // owned atoms; nullptr: none): at a coarse node, due() tells if they
-    // changed (global; evaluates the group's criterion), then follow()
-    // takes them (and the buffer) on the fine clock; to_fine[i] (owned
-    // atoms) is 1 for an atom that went to the fine clock, -1 to the coarse
-    // clock, 0 else. True if any atom changed clock (global)
-    bool due(const std::vector<int> *chosen);
+    // owned atoms; nullptr: none): at the coarse node of step node (steps
+    // after the one before), due() tells if they changed (global; evaluates
+    // the group's criterion after its updates), then follow() takes them
+    // (and the buffer) on the fine clock; to_fine[i] (owned atoms) is 1 for
+    // an atom that went to the fine clock, -1 to the coarse clock, 0 else.
+    // True if any atom changed clock (global)
+    bool due(const std::vector<int> *chosen, bigint node, int steps);
     bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
     bool follows_group() const { return dynamic || automatic; }
     // the clock changes of a run (atoms, coarse nodes with a change, coarse

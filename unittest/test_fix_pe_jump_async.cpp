@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <regex>
 
 using namespace PEJumpTest;
@@ -1155,11 +1156,44 @@ TEST(PEJumpAsync, ClocksFollowAGroupThatKeepsItsSizeAndIDSum)
   Sim s;
   moving_region(s, "");
   s.cmds({"variable swap atom (step<=100)*(id==10||id==13)+(step>100)*(id==11||id==12)",
-          "group pair dynamic all var swap every 100000", "unfix 1",
-          "fix 1 all pe_jump/async 10 pair", "run 200"});
+          "group pair dynamic all var swap every 10", "unfix 1", "fix 1 all pe_jump/async 10 pair",
+          "run 200"});
   const auto fine = on_fine_clock(s);
   EXPECT_EQ(fine[10] + fine[13], 0);
   EXPECT_EQ(fine[11] + fine[12], 2);
+}
+
+/* ----------------------------------------------------------------------
+   the clocks follow a dynamic group as often as LAMMPS updates it: at the
+   first coarse node after each update (every N steps)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated)
+{
+  std::map<int, std::vector<int>> tally;
+  for (const int every : {5, 10, 30}) {
+    Sim s(MPI_COMM_WORLD, false);
+    bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
+    s.cmds({"bond_coeff 2 1.0 1.0", "variable xc equal 2.0+0.02*step",
+            "region mov sphere v_xc 6.0621778 0 2.5 side in units box",
+            fmt::format("group fast dynamic all region mov every {}", every),
+            "fix 1 all pe_jump/async 10 fast", "thermo 0"});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 300");
+    const std::string log = ::testing::internal::GetCapturedStdout();
+    std::smatch count;
+    ASSERT_TRUE(std::regex_search(
+        log, count,
+        std::regex("Fix pe_jump/async: (\\d+) atoms changed clock at (\\d+) of 30 coarse nodes")))
+        << every;
+    tally[every] = {std::stoi(count[1]), std::stoi(count[2])};
+  }
+  // every 5 and 10: the group is updated (and followed) at every coarse
+  // node; every 30: at the nodes of steps 0, 30, ..., 270
+  EXPECT_EQ(tally[5], tally[10]);
+  EXPECT_GT(tally[10][1], 15);
+  EXPECT_GT(tally[30][1], 3);
+  EXPECT_LE(tally[30][1], 10);
 }
 
 /* ----------------------------------------------------------------------

@@ -54,15 +54,15 @@ run cascade track-auto -var integrator nve -var fast auto
 # baselines' K 10, then the variants (see the README, "Dynamic fast groups").
 # The fix evaluates the group at every coarse node itself; the group's own
 # updates (every N steps, in the middle of a step) would only cost time
-run crack async-dyn       -var integrator async -var K 10 -var fast dynamic -var R 10.0 -var every 100000
-run impact async-dyn      -var integrator async -var K 10 -var fast dynamic -var R 8.0  -var every 100000
-run impact async-dyn-r12  -var integrator async -var K 10 -var fast dynamic -var R 12.0 -var every 100000
-run impact async-auto     -var integrator async -var K 10 -var fast auto -var kthr 0.01 -var every 100000 -var skin 0.5
-run cascade async-dyn     -var integrator async -var K 10 -var fast dynamic -var R 4.0  -var every 100000
-run cascade async-dyn-r3  -var integrator async -var K 10 -var fast dynamic -var R 3.0  -var every 100000
-run cascade async-auto    -var integrator async -var K 10 -var fast auto -var kthr 2.0 -var every 100000
-run crack async-dyn-k5    -var integrator async -var K 5  -var fast dynamic -var R 10.0 -var every 100000
-run cascade async-auto-k2 -var integrator async -var K 2  -var fast auto -var kthr 2.0 -var every 100000
+run crack async-dyn       -var integrator async -var K 10 -var fast dynamic -var R 10.0 -var every 50
+run impact async-dyn      -var integrator async -var K 10 -var fast dynamic -var R 8.0  -var every 50
+run impact async-dyn-r12  -var integrator async -var K 10 -var fast dynamic -var R 12.0 -var every 50
+run impact async-auto     -var integrator async -var K 10 -var fast auto -var kthr 0.01 -var every 10 -var skin 0.5
+run cascade async-dyn     -var integrator async -var K 10 -var fast dynamic -var R 4.0  -var every 10
+run cascade async-dyn-r3  -var integrator async -var K 10 -var fast dynamic -var R 3.0  -var every 10
+run cascade async-auto    -var integrator async -var K 10 -var fast auto -var kthr 2.0 -var every 10
+run crack async-dyn-k5    -var integrator async -var K 5  -var fast dynamic -var R 10.0 -var every 50
+run cascade async-auto-k2 -var integrator async -var K 2  -var fast auto -var kthr 2.0 -var every 2
 # fast auto TOL (keyword of fix pe_jump/async): the fix chooses the fine-clock atoms
 run impact async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
 run cascade async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
