@@ -111,6 +111,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
 
   reinit_pending = opened_ahead = before_open = 0;
   h_step = 0.0;
+  end_time = 0.0;
   evals_step = evals_total = 0.0;
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
@@ -250,6 +251,21 @@ void FixPEJump::setup_pre_reverse(int eflag, int vflag)
 ------------------------------------------------------------------------- */
 
 void FixPEJump::initial_integrate(int /*vflag*/)
+{
+  begin_step();
+  // the Verlet loop's forces are taken at the primary node: a force that
+  // depends on time (a variable of time, e.g. in fix addforce) must see
+  // the node's time, or its impulse is off by h F'/2 per step (first
+  // order). Put back at the end of the step, before anything else looks
+  end_time = update->atime;
+  update->atime -= (1.0 - rule->node[rule->primary()]) * h_step;
+}
+
+/* ----------------------------------------------------------------------
+   the step begins: v^n -> v^{n+1/2}, free flight to the primary node
+------------------------------------------------------------------------- */
+
+void FixPEJump::begin_step()
 {
   if (reinit_pending) start_scheme(nullptr, false);
   reinit_pending = 0;
@@ -501,6 +517,7 @@ void FixPEJump::pre_reverse(int eflag, int vflag)
 
 void FixPEJump::final_integrate()
 {
+  update->atime = end_time;
   grow_work();
   evals_step = 1.0;
 

@@ -101,6 +101,7 @@ class FixPEJump : public Fix {
   int before_open;                   // atom->v holds v^n while this step's nodes are checked
   double advance_pending;            // free flight left for after this step's list build
   double h_step;                     // step size used in the current step
+  double end_time;                   // update->atime of the step; the node's during it
   double evals_step, evals_total;    // force evaluations (units of full ones)
 
   enum { SUM, SAMPLE };
@@ -117,6 +118,7 @@ class FixPEJump : public Fix {
   bool split_primary() const;
   bool use_copy() const;
   void start_scheme(const char *, bool);
+  void begin_step();
   void node_impulses();
   void open_steps();                 // v^n -> v^{n+1/2}
   bool open_while_moving() const;    // open_steps() and advance() may be one pass

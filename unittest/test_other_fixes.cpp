@@ -91,6 +91,37 @@ TEST(PEJumpOtherFixes, ConstantForcesGiveExactMotionForEveryRule)
 }
 
 /* ----------------------------------------------------------------------
+   a force that depends on time, fix addforce v_fx with fx = sin(2 time):
+   the fix forces are taken with the atoms at the primary node, and there
+   the time is that of the node, so that every rule integrates them to
+   second order (exact x(1) = 0.5 - sin(2)/4, v(1) = (1 - cos 2)/2); taken
+   at the end of the step they would give an error of h F/2
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, TimeDependentForcesAreSecondOrder)
+{
+  const auto error_at = [](const std::string &fix, double h) {
+    Sim s;
+    ideal_gas(s);
+    s.cmds({"velocity all set 0 0 0", "fix 1 all " + fix, "variable fx equal sin(2*time)",
+            "fix 2 all addforce v_fx 0 0", fmt::format("timestep {}", h),
+            "variable xc equal xcm(all,x)", "thermo 0"});
+    const double x0 = s.eval("v_xc");
+    s.cmd(fmt::format("run {} post no", static_cast<int>(std::lround(1.0 / h))));
+    // per unit mass: the atoms have mass 2
+    const double exact = 0.5 * (0.5 - std::sin(2.0) / 4.0);
+    return std::fabs(s.eval("v_xc") - x0 - exact);
+  };
+  const double nve = error_at("nve", 0.01);
+  for (const auto &rule : ALL_RULES) {
+    const std::string fix = "pe_jump quadrature " + rule;
+    const double coarse = error_at(fix, 0.01), fine = error_at(fix, 0.005);
+    EXPECT_LT(coarse, 2.0 * nve) << rule;
+    EXPECT_GT(coarse / fine, 3.5) << rule;    // second order: 4
+  }
+}
+
+/* ----------------------------------------------------------------------
    fix setforce and fix freeze hold atoms exactly for every rule
 ------------------------------------------------------------------------- */
 
