@@ -206,6 +206,16 @@ void FixPEJump::init()
 }
 
 /* ----------------------------------------------------------------------
+   an energy minimization moves the atoms and keeps the velocities: the
+   next run restarts the scheme
+------------------------------------------------------------------------- */
+
+void FixPEJump::min_setup(int /*vflag*/)
+{
+  scheme->atoms_minimized();
+}
+
+/* ----------------------------------------------------------------------
    forces at the current positions q^n are known here. Start the two-step
    scheme, or continue it if the state carried over (earlier run, restart)
 ------------------------------------------------------------------------- */

@@ -50,6 +50,7 @@ class FixPEJump : public Fix {
   int setmask() override;
   void init() override;
   void setup(int) override;
+  void min_setup(int) override;
   void setup_pre_reverse(int, int) override;
   void post_neighbor() override;
   void initial_integrate(int) override;

@@ -443,6 +443,16 @@ void FixPEJumpAsync::all_to_primary_node(double t)
   if (first->moved_too_far(groupbit, true)) next_reneighbor = update->ntimestep;
 }
 
+/* ----------------------------------------------------------------------
+   an energy minimization moves the atoms and keeps the velocities: the
+   next run restarts the scheme
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::min_setup(int /*vflag*/)
+{
+  scheme->atoms_minimized();
+}
+
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::setup(int /*vflag*/)

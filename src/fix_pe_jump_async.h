@@ -52,6 +52,7 @@ class FixPEJumpAsync : public Fix {
   int setmask() override;
   void init() override;
   void setup(int) override;
+  void min_setup(int) override;
   void setup_post_neighbor() override;
   void setup_pre_reverse(int, int) override;
   void initial_integrate(int) override;

@@ -29,7 +29,7 @@ using namespace LAMMPS_NS::PEJump;
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
     Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0},
-    count_at_end(-1)
+    count_at_end(-1), minimized(false)
 {
   JUMP = state.add("jump", 3, 0.0);
   VSIG = state.add("vsig", 1, 0.0);
@@ -105,16 +105,24 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style)
                    "restarts from the current state\n",
                    style);
   const bigint now = count(set);
-  if ((all_started > 0) && (now < count_at_end)) {
+  std::string why;
+  if (minimized)
+    why = "the atoms were moved by an energy minimization since the last run";
+  else if ((count_at_end >= 0) && (now < count_at_end))
+    why = fmt::format("{} atoms of the group were deleted (or left it) since the last run",
+                      count_at_end - now);
+  else if ((count_at_end >= 0) && (now > count_at_end))
+    why = fmt::format("{} atoms joined the group since the last run", now - count_at_end);
+  if ((all_started > 0) && !why.empty()) {
     all_started = 0;
     if (comm->me == 0)
       utils::logmesg(lmp,
-                     "Fix {}: {} atoms of the group were deleted (or left it) since the last "
-                     "run: the two-step scheme restarts from the current positions and "
+                     "Fix {}: {}: the two-step scheme restarts from the current positions and "
                      "velocities\n",
-                     style, count_at_end - now);
+                     style, why);
   }
   count_at_end = -1;
+  minimized = false;
 
   // velocities that are not finite (a velocity command gone wrong, e.g.
   // velocity scale to a negative temperature) would only show up later

@@ -50,12 +50,16 @@ namespace PEJump {
 
     // the ranks agree on started (restart data that does not fit, marked
     // -1, is told; so are atoms of the group deleted since the last run,
-    // whose partners' jumps hold forces that are gone: not started);
+    // whose partners' jumps hold forces that are gone, atoms that joined
+    // it, which have no jump, and an energy minimization: not started);
     // non-finite velocities are refused
     void agree_on_started(const AtomSet &, const char *style);
     // the end of a run: the fingerprints of the velocities and the number
     // of atoms in the group, for the next run to compare
     void end_run(const AtomSet &);
+    // an energy minimization moves the atoms (Fix::min_setup()): the state
+    // belongs to the old positions, the next run restarts the scheme
+    void atoms_minimized() { minimized = true; }
 
     // [v]^0 = step(i) F/m: the initial kick (scale 1) or none (scale 0)
     void start(const AtomSet &, double **f, double scale, const std::function<double(int)> &step);
@@ -121,6 +125,7 @@ namespace PEJump {
     bigint cached_step;
     double cached[2];
     bigint count_at_end;    // atoms of the group at the end of the last run (-1: none)
+    bool minimized;         // an energy minimization since the last run
     bigint count(const AtomSet &) const;    // global
   };
 

@@ -637,6 +637,62 @@ TEST(PEJump, DeletedAtomsRestartTheScheme)
 }
 
 /* ----------------------------------------------------------------------
+   an energy minimization between runs moves the atoms and leaves the
+   velocities: the jumps (and Lobatto start-node forces) belong to the old
+   positions. The scheme restarts (log message), so that the run goes on
+   as with the fix defined anew after the minimization (with the stale
+   state: 1e-2 off with lobatto 2)
+------------------------------------------------------------------------- */
+
+TEST(PEJump, MinimizationBetweenRunsRestartsTheScheme)
+{
+  for (const std::string fix :
+       {"pe_jump", "pe_jump quadrature lobatto 2", "pe_jump quadrature lobatto 3",
+        "pe_jump/async 5 fast", "pe_jump/async 5 fast quadrature lobatto 3"}) {
+    std::vector<double> x[2];
+    for (const int redefine : {0, 1}) {
+      Sim s(MPI_COMM_WORLD, false);
+      lj_liquid(s);
+      s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
+              "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 50 post no",
+              "minimize 0 1e-8 20 20"});
+      if (redefine) s.cmds({"unfix 1", "fix 1 all " + fix});
+      ::testing::internal::CaptureStdout();
+      s.cmd("run 20 post no");
+      const std::string out = ::testing::internal::GetCapturedStdout();
+      if (!redefine)
+        EXPECT_THAT(out, ContainsRegex("energy minimization since the last run")) << fix;
+      x[redefine] = unwrapped_positions(s);
+    }
+    EXPECT_LT(max_diff(x[0], x[1]), 1e-12) << fix;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   atoms that join the group between runs have no jump yet: the scheme
+   restarts (log message), and the total momentum stays what it was
+------------------------------------------------------------------------- */
+
+TEST(PEJump, AtomsJoiningTheGroupRestartTheScheme)
+{
+  for (const std::string fix :
+       {"pe_jump", "pe_jump quadrature lobatto 2", "pe_jump quadrature lobatto 3"}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s);
+    s.cmds({"region half block INF 3.36 INF INF INF INF units box", "group mob region half",
+            "fix 1 mob " + fix, "timestep 0.002", "thermo 0", "run 50 post no",
+            "group mob union mob all"});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 0 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    EXPECT_THAT(out, ContainsRegex("atoms joined the group since the last run")) << fix;
+    const double p0 = s.eval("vcm(all,x)*mass(all)");
+    s.cmd("run 20 post no");
+    EXPECT_NEAR(s.eval("vcm(all,x)*mass(all)"), p0, 1e-12) << fix;
+  }
+}
+
+/* ----------------------------------------------------------------------
    cost: evaluations per step, checked against a pair style that counts
    its own compute() calls
 ------------------------------------------------------------------------- */
