@@ -179,6 +179,7 @@ void FixPEJump::init()
                    style, ifix->id, ifix->style);
 
   others->sort(*sampler);
+  sampler->refuse_velocity_forces(style, rule->name(), rule->only_end_nodes());
   maxexchange = state->values();
 
   // forces that the rule does not integrate (other fixes that add forces,

@@ -192,6 +192,7 @@ void FixPEJumpAsync::init()
 {
   scheme->init(style);
   others->sort(*sampler);
+  sampler->refuse_velocity_forces(style, rule->name(), false);
   refuse_unsplittable();
   refuse_other_fixes();
   first->refuse_unsupported(style);

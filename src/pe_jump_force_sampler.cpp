@@ -64,6 +64,25 @@ int ForceSampler::parse(const char *name)
   return 0;
 }
 
+/* ----------------------------------------------------------------------
+   measured with bond_style bpm/spring and damping 1, 0.1, 0.02: midpoint
+   and lobatto 3 grow unstable at any time step, lobatto 2 follows fix nve
+------------------------------------------------------------------------- */
+
+void ForceSampler::refuse_velocity_forces(const char *style, const std::string &rule,
+                                          bool end_nodes) const
+{
+  if (!comm->ghost_velocity || end_nodes) return;
+  error->all(FLERR,
+             "Fix {} with quadrature {}: comm_modify vel yes is set, as force styles whose "
+             "forces depend on the velocities need (dpd, granular, bpm damping, lubricate, "
+             "...). Such forces drive the alternating mode of the momentum jumps, which then "
+             "grows at any time step. Use quadrature lobatto 2 (fix pe_jump; velocity Verlet "
+             "for these forces) or fix nve, or comm_modify vel no if no force depends on the "
+             "velocities",
+             style, rule);
+}
+
 /* ---------------------------------------------------------------------- */
 
 int ForceSampler::present() const

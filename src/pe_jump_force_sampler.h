@@ -16,6 +16,7 @@
 
 #include "pointers.h"
 
+#include <string>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -47,6 +48,12 @@ namespace PEJump {
 
     // contributions that the current force field has (call in init())
     int present() const;
+
+    // a force field whose forces depend on the velocities (the styles that
+    // need comm_modify vel yes: dpd, granular, bpm damping, ...) drives the
+    // parasitic mode of the jumps unless the rule has only end nodes
+    // (velocity Verlet for such forces): refused with the rule's name then
+    void refuse_velocity_forces(const char *style, const std::string &rule, bool end_nodes) const;
 
     // forward-communicate positions, clear forces, run the pre_force stage
     // of the other fixes, compute the contributions in mask with the given

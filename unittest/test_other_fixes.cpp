@@ -122,6 +122,72 @@ TEST(PEJumpOtherFixes, TimeDependentForcesAreSecondOrder)
 }
 
 /* ----------------------------------------------------------------------
+   forces that depend on the velocities (bond_style bpm/spring with
+   damping; the styles that need comm_modify vel yes) drive the
+   alternating mode of the jumps, which then grows at any time step
+   (measured: midpoint and lobatto 3 stop as unstable with damping 1, 0.1
+   and 0.02): refused, except with lobatto 2, which is velocity Verlet for
+   them and follows fix nve
+------------------------------------------------------------------------- */
+
+namespace {
+void damped_bpm_block(Sim &s)
+{
+  s.cmds({"units lj",
+          "atom_style bond",
+          "atom_modify map array",
+          "boundary f f f",
+          "special_bonds lj 0.0 1.0 1.0 coul 0.0 1.0 1.0",
+          "newton on off",
+          "comm_modify vel yes cutoff 2.6",
+          "lattice fcc 1.0",
+          "region box block -4 4 -4 4 -4 4",
+          "create_box 1 box bond/types 1 extra/bond/per/atom 20 extra/special/per/atom 50",
+          "region blk block -2 2 -2 2 -2 2",
+          "create_atoms 1 region blk",
+          "displace_atoms all random 0.05 0.05 0.05 134598738",
+          "mass 1 1.0",
+          "neighbor 1.0 bin",
+          "pair_style bpm/spring",
+          "pair_coeff 1 1 1.0 1.0 1.0",
+          "create_bonds many all all 1 0.0 1.5",
+          "neighbor 0.3 bin",
+          "special_bonds lj 0.0 1.0 1.0 coul 1.0 1.0 1.0",
+          "bond_style bpm/spring",
+          "bond_coeff 1 1.0 0.5 1.0",
+          "velocity all create 0.05 4711",
+          "timestep 0.05",
+          "thermo 0"});
+}
+}    // namespace
+
+TEST(PEJumpOtherFixes, VelocityDependentForcesNeedLobatto2)
+{
+  for (const std::string fix : {"pe_jump", "pe_jump quadrature lobatto 3",
+                                "pe_jump quadrature auto 1e-8", "pe_jump/async 2 all"}) {
+    const std::string err = [&]() {
+      Sim s;
+      damped_bpm_block(s);
+      try {
+        s.cmds({"fix 1 all " + fix, "run 1"});
+      } catch (LAMMPS_NS::LAMMPSException &e) {
+        return std::string(e.what());
+      }
+      return std::string("no error");
+    }();
+    EXPECT_THAT(err, ContainsRegex("comm_modify vel yes is set.*Use quadrature lobatto 2")) << fix;
+  }
+  std::vector<double> x[2];
+  for (const int which : {0, 1}) {
+    Sim s;
+    damped_bpm_block(s);
+    s.cmds({which ? "fix 1 all pe_jump quadrature lobatto 2" : "fix 1 all nve", "run 200"});
+    x[which] = unwrapped_positions(s);
+  }
+  EXPECT_LT(max_diff(x[0], x[1]), 1e-10);
+}
+
+/* ----------------------------------------------------------------------
    fix setforce and fix freeze hold atoms exactly for every rule
 ------------------------------------------------------------------------- */
 
