@@ -44,7 +44,8 @@ import numpy as np
 SCENES = {
     # scene: (default runs in table order, reference run, energy scale)
     "crack": (["nve", "sync", "async", "async-band", "nve-coarse", "sync-coarse",
-               "nve-noshift", "async-noshift", "async-dyn", "async-dyn-k5"], "ref", "E0"),
+               "nve-noshift", "async-noshift", "async-dyn", "async-dyn-k5", "async-fastauto",
+               "async-fastauto-tol0.1", "async-fastauto-tol0.2"], "ref", "E0"),
     "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
                 "async-dyn-r12", "async-auto", "async-fastauto",
                 "async-fastauto-tol0.1", "async-fastauto-tol0.2"], "ref", "E0"),

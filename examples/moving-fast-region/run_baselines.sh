@@ -52,8 +52,9 @@ run cascade track-auto -var integrator nve -var fast auto
 # at coarse nodes; since 8be7040 an atom that changes clock restarts its
 # jump with the initial kick of the new step). Main rows at the static
 # baselines' K 10, then the variants (see the README, "Dynamic fast groups").
-# The fix evaluates the group at every coarse node itself; the group's own
-# updates (every N steps, in the middle of a step) would only cost time
+# The fix follows the group at the first coarse node after each of its
+# updates (every N steps): every 50 where the region moves slowly (crack
+# tip, projectile), every K elsewhere
 run crack async-dyn       -var integrator async -var K 10 -var fast dynamic -var R 10.0 -var every 50
 run impact async-dyn      -var integrator async -var K 10 -var fast dynamic -var R 8.0  -var every 50
 run impact async-dyn-r12  -var integrator async -var K 10 -var fast dynamic -var R 12.0 -var every 50
@@ -72,3 +73,6 @@ run impact async-fastauto-tol0.1 -var integrator async -var K 10 -var fast keywo
 run impact async-fastauto-tol0.2 -var integrator async -var K 10 -var fast keyword -var tol 0.2
 run cascade async-fastauto-tol0.1 -var integrator async -var K 10 -var fast keyword -var tol 0.1
 run cascade async-fastauto-tol0.2 -var integrator async -var K 10 -var fast keyword -var tol 0.2
+run crack async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
+run crack async-fastauto-tol0.1 -var integrator async -var K 10 -var fast keyword -var tol 0.1
+run crack async-fastauto-tol0.2 -var integrator async -var K 10 -var fast keyword -var tol 0.2
