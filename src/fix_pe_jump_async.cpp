@@ -80,6 +80,11 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   opts.parse(lmp, style, narg, arg, 5, true);
   const int nfine = utils::inumeric(FLERR, arg[3], false, lmp);
   if (nfine < 1) error->all(FLERR, "Fix pe_jump/async needs K >= 1 fine steps per coarse step");
+  if (group->dynamic[igroup])
+    error->all(FLERR,
+               "Fix pe_jump/async does not allow a dynamic fix group ({}): the fast group may "
+               "be dynamic, the fix group must not",
+               group->names[igroup]);
   if (group->find(arg[4]) < 0)
     error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
   refuse_keywords();
@@ -198,9 +203,11 @@ void FixPEJumpAsync::init()
   first->refuse_unsupported(style);
   if (first->active() && assign->follows_group())
     error->all(FLERR,
-               "Fix pe_jump/async cannot follow the dynamic fast group {} (or fast auto) with "
-               "neigh_modify include: atoms would change clock outside the include group",
-               assign->fast_group_name());
+               "Fix pe_jump/async cannot {} with neigh_modify include: atoms would change "
+               "clock outside the include group",
+               (opts.fast_auto > 0.0)
+                   ? std::string("choose fine-clock atoms with fast auto")
+                   : "follow the dynamic fast group " + assign->fast_group_name());
   split->start_run();
   assign->find_groups();
   split->set_fine_bit(assign->clock_bit());

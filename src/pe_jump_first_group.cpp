@@ -63,8 +63,9 @@ void FirstGroup::refuse_unsupported(const char *style) const
                style, group->names[include]);
   if (domain->box_change)
     error->all(FLERR,
-               "Fix {} with neigh_modify include does not support a box that changes during the "
-               "run: remove neigh_modify include (and atom_modify first)",
+               "Fix {} with neigh_modify include does not support a box or processor "
+               "subdomains that change during the run (fix deform, fix balance, barostats, ...): "
+               "remove neigh_modify include (and atom_modify first)",
                style);
   // the pair lists hold only pairs of two atoms of the group: the pair
   // forces between the slow atoms, and those of the interface, would be lost

@@ -973,7 +973,7 @@ TEST(PEJumpAsync, IncludeGroupRefusals)
               ContainsRegex("moves every atom of its group every step, but 120 of them are not"));
   EXPECT_THAT(error_with("type 2", {"fix 1 stiff pe_jump", "run 5"}), ContainsRegex("no error"));
   EXPECT_THAT(error_with("type 2", {async, "fix 3 all deform 1 x scale 1.01", "run 0"}),
-              ContainsRegex("does not support a box that changes"));
+              ContainsRegex("does not support a box or processor subdomains that change"));
 }
 
 /* ----------------------------------------------------------------------
