@@ -51,6 +51,17 @@ namespace PEJump {
     return static_cast<double>(h >> 11);
   }
 
+  // A 64-bit mix of an atom ID (the finalizer of splitmix64): sets of atoms
+  // told by the sum of these (modulo 2^64) collide with a chance of about
+  // 2^-64; also a weight per atom that does not depend on its index
+  inline uint64_t id_hash(tagint id)
+  {
+    uint64_t z = static_cast<uint64_t>(id) + 0x9E3779B97F4A7C15ULL;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
+
   class AtomState : protected Pointers {
    public:
     explicit AtomState(class LAMMPS *);

@@ -251,28 +251,20 @@ bigint ClockAssignment::fast_off_clock() const
 }
 
 /* ----------------------------------------------------------------------
-   a set of atoms is told by its number and the sum of a 64-bit mix of the
-   IDs (the finalizer of splitmix64), summed modulo 2^64, so that the sum
-   does not depend on the order and two sets collide with a chance of
-   about 2^-53 (a plain sum of IDs cannot tell 10 + 13 from 11 + 12)
+   a set of atoms is told by its number and the sum of the hashes of the
+   IDs, summed modulo 2^64, so that the sum does not depend on the order
+   and two sets collide with a chance of about 2^-53 (a plain sum of IDs
+   cannot tell 10 + 13 from 11 + 12)
 ------------------------------------------------------------------------- */
 
 namespace {
-uint64_t mixed_id(tagint id)
-{
-  uint64_t z = static_cast<uint64_t>(id) + 0x9E3779B97F4A7C15ULL;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
-
 template <typename In> void id_signature(const Atom *atom, MPI_Comm world, In in, double *sig)
 {
   unsigned long long local[2] = {0, 0}, all[2];
   for (int i = 0; i < atom->nlocal; i++)
     if (in(i)) {
       ++local[0];
-      local[1] += mixed_id(atom->tag[i]);
+      local[1] += id_hash(atom->tag[i]);
     }
   MPI_Allreduce(local, all, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, world);
   sig[0] = static_cast<double>(all[0]);

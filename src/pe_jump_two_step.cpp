@@ -15,11 +15,13 @@
 
 #include "atom.h"
 #include "comm.h"
+#include "domain.h"
 #include "error.h"
 #include "force.h"
 #include "pe_jump_atom_state.h"
 #include "update.h"
 
+#include <algorithm>
 #include <cmath>
 
 using namespace LAMMPS_NS;
@@ -28,8 +30,8 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
-    Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0},
-    count_at_end(-1), minimized(false)
+    Pointers(lmp), started(0), fresh(0), state(table),
+    cached_step(-1), cached{0.0, 0.0}, at_end{-1, {0.0, 0.0, 0.0}, 0.0}, minimized(false)
 {
   JUMP = state.add("jump", 3, 0.0);
   VSIG = state.add("vsig", 1, 0.0);
@@ -104,15 +106,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style)
                    "(written with other settings or by another version): the two-step scheme "
                    "restarts from the current state\n",
                    style);
-  const bigint now = count(set);
-  std::string why;
-  if (minimized)
-    why = "the atoms were moved by an energy minimization since the last run";
-  else if ((count_at_end >= 0) && (now < count_at_end))
-    why = fmt::format("{} atoms of the group were deleted (or left it) since the last run",
-                      count_at_end - now);
-  else if ((count_at_end >= 0) && (now > count_at_end))
-    why = fmt::format("{} atoms joined the group since the last run", now - count_at_end);
+  const std::string why = changed_since_run(census(set));
   if ((all_started > 0) && !why.empty()) {
     all_started = 0;
     if (comm->me == 0)
@@ -121,7 +115,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style)
                      "velocities\n",
                      style, why);
   }
-  count_at_end = -1;
+  at_end.atoms = -1;
   minimized = false;
 
   // velocities that are not finite (a velocity command gone wrong, e.g.
@@ -232,19 +226,49 @@ void TwoStep::mark_all(const AtomSet &set) const
 void TwoStep::end_run(const AtomSet &set)
 {
   mark_all(set);
-  count_at_end = count(set);
+  at_end = census(set);
 }
 
 /* ---------------------------------------------------------------------- */
 
-bigint TwoStep::count(const AtomSet &set) const
+TwoStep::Census TwoStep::census(const AtomSet &set) const
 {
-  bigint local = 0, global = 0;
-  set.each(atom->mask, atom->nlocal, [&](int) {
-    ++local;
+  double local[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, global[5];
+  double **x = atom->x;
+  const imageint *image = atom->image;
+  const tagint *tag = atom->tag;
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    double u[3];
+    domain->unmap(x[i], image[i], u);
+    const double w = 1.0 + static_cast<double>(id_hash(tag[i]) >> 11) * 0x1.0p-53;
+    for (int k = 0; k < 3; k++) local[k] += w * u[k];
+    local[3] += w * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    local[4] += 1.0;
   });
-  MPI_Allreduce(&local, &global, 1, MPI_LMP_BIGINT, MPI_SUM, world);
-  return global;
+  MPI_Allreduce(local, global, 5, MPI_DOUBLE, MPI_SUM, world);
+  return {static_cast<bigint>(global[4]), {global[0], global[1], global[2]}, global[3]};
+}
+
+/* ----------------------------------------------------------------------
+   why the state of the last run no longer fits ("" if it does)
+------------------------------------------------------------------------- */
+
+std::string TwoStep::changed_since_run(const Census &now) const
+{
+  if (minimized) return "the atoms were moved by an energy minimization since the last run";
+  if (at_end.atoms < 0) return "";
+  if (now.atoms < at_end.atoms)
+    return fmt::format("{} atoms of the group were deleted (or left it) since the last run",
+                       at_end.atoms - now.atoms);
+  if (now.atoms > at_end.atoms)
+    return fmt::format("{} atoms joined the group since the last run", now.atoms - at_end.atoms);
+  // wrapping into a periodic box changes a position by round-off only
+  const double tolerance = 1e-12 * std::max(now.scale, at_end.scale);
+  for (int k = 0; k < 3; k++)
+    if (std::fabs(now.moment[k] - at_end.moment[k]) > tolerance)
+      return "atoms of the group were moved since the last run (displace_atoms, set, change_box "
+             "with remap, ...)";
+  return "";
 }
 
 /* ---------------------------------------------------------------------- */

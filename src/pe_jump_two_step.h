@@ -17,6 +17,7 @@
 #include "pe_jump_node_sampler.h"
 
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -51,7 +52,8 @@ namespace PEJump {
     // the ranks agree on started (restart data that does not fit, marked
     // -1, is told; so are atoms of the group deleted since the last run,
     // whose partners' jumps hold forces that are gone, atoms that joined
-    // it, which have no jump, and an energy minimization: not started);
+    // it, which have no jump, and atoms moved by an energy minimization or
+    // a command, whose jumps belong to the old positions: not started);
     // non-finite velocities are refused
     void agree_on_started(const AtomSet &, const char *style);
     // the end of a run: the fingerprints of the velocities and the number
@@ -124,9 +126,19 @@ namespace PEJump {
     std::vector<double> inverse_mass;
     bigint cached_step;
     double cached[2];
-    bigint count_at_end;    // atoms of the group at the end of the last run (-1: none)
-    bool minimized;         // an energy minimization since the last run
-    bigint count(const AtomSet &) const;    // global
+    // the atoms of the group (global number) and a weighted sum of their
+    // unwrapped positions, sum_i w_i x_i with w_i in [1, 2) from a hash of
+    // the ID, and its scale sum_i w_i |x_i|: moving atoms changes the sum,
+    // wrapping them into a periodic box does not (beyond round-off)
+    struct Census {
+      bigint atoms;
+      double moment[3];
+      double scale;
+    };
+    Census census(const AtomSet &) const;    // global
+    Census at_end;                           // at the end of the last run (atoms -1: none)
+    bool minimized;                          // an energy minimization since the last run
+    std::string changed_since_run(const Census &now) const;
   };
 
 }    // namespace PEJump

@@ -693,6 +693,41 @@ TEST(PEJump, AtomsJoiningTheGroupRestartTheScheme)
 }
 
 /* ----------------------------------------------------------------------
+   atoms moved by a command between runs (displace_atoms): the jumps
+   belong to the old positions, the scheme restarts (log message) and the
+   run equals one with the fix defined anew; wrapping atoms into the box
+   (balance, the next run's setup) is no move
+------------------------------------------------------------------------- */
+
+TEST(PEJump, AtomsMovedBetweenRunsRestartTheScheme)
+{
+  for (const std::string fix :
+       {"pe_jump", "pe_jump quadrature lobatto 3", "pe_jump/async 5 fast"}) {
+    std::vector<double> x[2];
+    for (const int redefine : {0, 1}) {
+      Sim s(MPI_COMM_WORLD, false);
+      lj_liquid(s);
+      s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
+              "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 300 post no",
+              "balance 1.0 shift x 5 1.1"});
+      ::testing::internal::CaptureStdout();
+      s.cmd("run 5 post no");
+      const std::string quiet = ::testing::internal::GetCapturedStdout();
+      EXPECT_THAT(quiet, ::testing::Not(ContainsRegex("restarts"))) << fix;
+      s.cmd("displace_atoms all random 0.01 0.01 0.01 4711");
+      if (redefine) s.cmds({"unfix 1", "fix 1 all " + fix});
+      ::testing::internal::CaptureStdout();
+      s.cmd("run 20 post no");
+      const std::string out = ::testing::internal::GetCapturedStdout();
+      if (!redefine)
+        EXPECT_THAT(out, ContainsRegex("atoms of the group were moved since the last run")) << fix;
+      x[redefine] = unwrapped_positions(s);
+    }
+    EXPECT_LT(max_diff(x[0], x[1]), 1e-12) << fix;
+  }
+}
+
+/* ----------------------------------------------------------------------
    cost: evaluations per step, checked against a pair style that counts
    its own compute() calls
 ------------------------------------------------------------------------- */
