@@ -240,7 +240,7 @@ TwoStep::Census TwoStep::census(const AtomSet &set) const
   set.each(atom->mask, atom->nlocal, [&](int i) {
     double u[3];
     domain->unmap(x[i], image[i], u);
-    const double w = 1.0 + static_cast<double>(id_hash(tag[i]) >> 11) * 0x1.0p-53;
+    const double w = 1.0 + static_cast<double>(id_hash(tag[i]) >> 11) / 9007199254740992.0;
     for (int k = 0; k < 3; k++) local[k] += w * u[k];
     local[3] += w * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     local[4] += 1.0;
