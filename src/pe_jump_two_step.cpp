@@ -266,8 +266,8 @@ std::string TwoStep::changed_since_run(const Census &now) const
   const double tolerance = 1e-12 * std::max(now.scale, at_end.scale);
   for (int k = 0; k < 3; k++)
     if (std::fabs(now.moment[k] - at_end.moment[k]) > tolerance)
-      return "atoms of the group were moved since the last run (displace_atoms, set, change_box "
-             "with remap, ...)";
+      return "atoms of the group were moved (or renumbered) since the last run (displace_atoms, "
+             "set, change_box with remap, reset_atoms id, ...)";
   return "";
 }
 
