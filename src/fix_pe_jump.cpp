@@ -228,7 +228,9 @@ void FixPEJump::setup(int /*vflag*/)
   guard->start_run();
   opened_ahead = 0;
   evals_step = 0.0;
-  scheme->agree_on_started(group_atoms(), style);
+  // a new time step between runs: the jumps fit the old one (restart), unless
+  // they are to be carried over (compensate given, or adapt)
+  scheme->agree_on_started(group_atoms(), style, (opts.compensate < 0) && !steps->adapts());
   if (!scheme->started) {
     start_scheme(nullptr, true);
   } else {

@@ -465,7 +465,7 @@ void FixPEJumpAsync::min_setup(int /*vflag*/)
 
 void FixPEJumpAsync::setup(int /*vflag*/)
 {
-  scheme->agree_on_started(group_atoms(), style);
+  scheme->agree_on_started(group_atoms(), style, opts.compensate < 0);
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);

@@ -31,7 +31,7 @@ using namespace LAMMPS_NS::PEJump;
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
     Pointers(lmp), started(0), fresh(0), state(table),
-    cached_step(-1), cached{0.0, 0.0}, at_end{-1, {0.0, 0.0, 0.0}, 0.0}, minimized(false)
+    cached_step(-1), cached{0.0, 0.0}, at_end{-1, {0.0, 0.0, 0.0}, 0.0, 0.0, 0.0}, minimized(false)
 {
   JUMP = state.add("jump", 3, 0.0);
   VSIG = state.add("vsig", 1, 0.0);
@@ -96,7 +96,7 @@ double TwoStep::inverse_mass_of(int i) const
    that own atoms: every rank must take the same decision
 ------------------------------------------------------------------------- */
 
-void TwoStep::agree_on_started(const AtomSet &set, const char *style)
+void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_step_restarts)
 {
   int all_started = 0;
   MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
@@ -106,7 +106,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style)
                    "(written with other settings or by another version): the two-step scheme "
                    "restarts from the current state\n",
                    style);
-  const std::string why = changed_since_run(census(set));
+  const std::string why = changed_since_run(census(set), new_step_restarts);
   if ((all_started > 0) && !why.empty()) {
     all_started = 0;
     if (comm->me == 0)
@@ -233,27 +233,35 @@ void TwoStep::end_run(const AtomSet &set)
 
 TwoStep::Census TwoStep::census(const AtomSet &set) const
 {
-  double local[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, global[5];
+  double local[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, global[6];
   double **x = atom->x;
   const imageint *image = atom->image;
   const tagint *tag = atom->tag;
+  const double *rmass = atom->rmass;
+  const double *mass = atom->mass;
+  const int *type = atom->type;
   set.each(atom->mask, atom->nlocal, [&](int i) {
     double u[3];
     domain->unmap(x[i], image[i], u);
     const double w = 1.0 + static_cast<double>(id_hash(tag[i]) >> 11) / 9007199254740992.0;
     for (int k = 0; k < 3; k++) local[k] += w * u[k];
     local[3] += w * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-    local[4] += 1.0;
+    local[4] += w * (rmass ? rmass[i] : mass[type[i]]);
+    local[5] += 1.0;
   });
-  MPI_Allreduce(local, global, 5, MPI_DOUBLE, MPI_SUM, world);
-  return {static_cast<bigint>(global[4]), {global[0], global[1], global[2]}, global[3]};
+  MPI_Allreduce(local, global, 6, MPI_DOUBLE, MPI_SUM, world);
+  return {static_cast<bigint>(global[5]),
+          {global[0], global[1], global[2]},
+          global[3],
+          global[4],
+          update->dt};
 }
 
 /* ----------------------------------------------------------------------
    why the state of the last run no longer fits ("" if it does)
 ------------------------------------------------------------------------- */
 
-std::string TwoStep::changed_since_run(const Census &now) const
+std::string TwoStep::changed_since_run(const Census &now, bool new_step_restarts) const
 {
   if (minimized) return "the atoms were moved by an energy minimization since the last run";
   if (at_end.atoms < 0) return "";
@@ -268,6 +276,12 @@ std::string TwoStep::changed_since_run(const Census &now) const
     if (std::fabs(now.moment[k] - at_end.moment[k]) > tolerance)
       return "atoms of the group were moved (or renumbered) since the last run (displace_atoms, "
              "set, change_box with remap, reset_atoms id, ...)";
+  if (std::fabs(now.mass - at_end.mass) > 1e-12 * std::max(now.mass, at_end.mass))
+    return "the masses of atoms of the group changed since the last run";
+  if (new_step_restarts && (now.dt != at_end.dt))
+    return fmt::format("the time step changed since the last run (from {} to {}; give "
+                       "compensate no (or yes) to carry the jumps over instead)",
+                       at_end.dt, now.dt);
   return "";
 }
 

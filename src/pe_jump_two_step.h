@@ -52,10 +52,13 @@ namespace PEJump {
     // the ranks agree on started (restart data that does not fit, marked
     // -1, is told; so are atoms of the group deleted since the last run,
     // whose partners' jumps hold forces that are gone, atoms that joined
-    // it, which have no jump, and atoms moved by an energy minimization or
-    // a command, whose jumps belong to the old positions: not started);
+    // it, which have no jump, atoms moved by an energy minimization or a
+    // command, whose jumps belong to the old positions, and new masses or
+    // a new time step, which the jumps do not fit: not started);
     // non-finite velocities are refused
-    void agree_on_started(const AtomSet &, const char *style);
+    // new_step_restarts: a time step changed since the last run restarts
+    // the scheme too (unless the jumps are to be carried over)
+    void agree_on_started(const AtomSet &, const char *style, bool new_step_restarts);
     // the end of a run: the fingerprints of the velocities and the number
     // of atoms in the group, for the next run to compare
     void end_run(const AtomSet &);
@@ -134,11 +137,13 @@ namespace PEJump {
       bigint atoms;
       double moment[3];
       double scale;
+      double mass;    // sum_i w_i m_i
+      double dt;      // the time step
     };
     Census census(const AtomSet &) const;    // global
     Census at_end;                           // at the end of the last run (atoms -1: none)
     bool minimized;                          // an energy minimization since the last run
-    std::string changed_since_run(const Census &now) const;
+    std::string changed_since_run(const Census &now, bool new_step_restarts) const;
   };
 
 }    // namespace PEJump

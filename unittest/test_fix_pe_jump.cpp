@@ -18,7 +18,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <random>
+#include <regex>
 
 using namespace PEJumpTest;
 using ::testing::ContainsRegex;
@@ -727,6 +729,57 @@ TEST(PEJump, AtomsMovedBetweenRunsRestartTheScheme)
       x[redefine] = unwrapped_positions(s);
     }
     EXPECT_LT(max_diff(x[0], x[1]), 1e-12) << fix;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   a new time step between runs: the jumps, h F/m of the old step, would
+   leave an alternating jump of (h' - h) F/m, which shows in etotal; the
+   scheme restarts (log message), as a fix defined anew, unless compensate
+   is given (then the jumps are carried over, e.g. to keep the
+   pseudo-energy). Likewise new masses. etotal then spreads as fix nve's
+------------------------------------------------------------------------- */
+
+TEST(PEJump, NewTimeStepOrMassesBetweenRunsRestartTheScheme)
+{
+  // spread of etotal over 50 steps after the change
+  const auto spread_after = [](Sim &s) {
+    double lo = 1e300, hi = -1e300;
+    for (int n = 0; n < 50; n++) {
+      s.cmd("run 1 post no");
+      lo = std::min(lo, s.eval("etotal"));
+      hi = std::max(hi, s.eval("etotal"));
+    }
+    return hi - lo;
+  };
+  for (const std::string change : {"timestep 0.006", "mass 1 1.5"}) {
+    std::map<std::string, double> spread;
+    std::vector<double> x[2];
+    for (const std::string fix : {"nve", "pe_jump", "pe_jump compensate no", "pe_jump redefined",
+                                  "pe_jump quadrature lobatto 3"}) {
+      Sim s(MPI_COMM_WORLD, false);
+      lj_liquid(s);
+      const std::string style = (fix == "pe_jump redefined") ? "pe_jump" : fix;
+      s.cmds({"fix 1 all " + style, "timestep 0.002", "thermo 0", "run 100 post no", change});
+      if (fix == "pe_jump redefined") s.cmds({"unfix 1", "fix 1 all pe_jump"});
+      ::testing::internal::CaptureStdout();
+      s.cmd("run 0 post no");
+      const std::string out = ::testing::internal::GetCapturedStdout();
+      // (compensate carries jumps over a new step only: new masses restart anyway)
+      const bool restarts = (fix == "pe_jump") || (fix == "pe_jump quadrature lobatto 3") ||
+          ((fix == "pe_jump compensate no") && (change[0] == 'm'));
+      EXPECT_EQ(std::regex_search(out, std::regex("changed since the last run")), restarts)
+          << fix << ", " << change;
+      spread[fix] = spread_after(s);
+      if (fix == "pe_jump") x[0] = unwrapped_positions(s);
+      if (fix == "pe_jump redefined") x[1] = unwrapped_positions(s);
+    }
+    std::printf("%s: etotal spread nve %g, pe_jump %g, compensate no %g, lobatto 3 %g\n",
+                change.c_str(), spread["nve"], spread["pe_jump"], spread["pe_jump compensate no"],
+                spread["pe_jump quadrature lobatto 3"]);
+    EXPECT_LT(max_diff(x[0], x[1]), 1e-12) << change;
+    EXPECT_LT(spread["pe_jump"], 2.0 * spread["nve"]) << change;
+    EXPECT_LT(spread["pe_jump quadrature lobatto 3"], 2.0 * spread["nve"]) << change;
   }
 }
 
