@@ -152,7 +152,8 @@ void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *ch
   // layer adds no atom (everything reachable is on the fine clock)
   for (int layer = 0; layer < layers; layer++) {
     split.build();
-    split.mark_fine_participants(participant);
+    // the partners at the current positions, whatever the age of the lists
+    split.mark_fine_partners(participant);
     gather(participant);
     int added = 0;
     for (int i = 0; i < atom->nlocal; i++)

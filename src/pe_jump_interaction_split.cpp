@@ -352,16 +352,30 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
   }
 }
 
-/* ---------------------------------------------------------------------- */
+/* ----------------------------------------------------------------------
+   the atoms of the FINE interactions: all pairs of the lists, or (acting)
+   only those closer than the cutoff
+------------------------------------------------------------------------- */
 
-void InteractionSplit::mark_fine_participants(std::vector<int> &flag) const
+void InteractionSplit::mark_fine(std::vector<int> &flag, bool acting) const
 {
   flag.assign(atom->nlocal + atom->nghost, 0);
+  double **x = atom->x;
+  const int *type = atom->type;
+  double **cutsq = (acting && force->pair) ? force->pair->cutsq : nullptr;
   for (const auto &p : pairs) {
     const auto &part = p.part[FINE];
     for (const int i : part.ilist) {
-      flag[i] = 1;
-      for (int jj = 0; jj < part.numneigh[i]; jj++) flag[part.firstneigh[i][jj] & NEIGHMASK] = 1;
+      for (int jj = 0; jj < part.numneigh[i]; jj++) {
+        const int j = part.firstneigh[i][jj] & NEIGHMASK;
+        if (cutsq) {
+          const double dx = x[i][0] - x[j][0];
+          const double dy = x[i][1] - x[j][1];
+          const double dz = x[i][2] - x[j][2];
+          if (dx * dx + dy * dy + dz * dz >= cutsq[type[i]][type[j]]) continue;
+        }
+        flag[i] = flag[j] = 1;
+      }
     }
   }
   for (const auto &t : topo) {

@@ -80,7 +80,13 @@ namespace PEJump {
 
     // flag[i] = 1 for every atom i (owned or ghost) that takes part in an
     // interaction of the FINE subset (a pair of its lists, a bond, ...)
-    void mark_fine_participants(std::vector<int> &flag) const;
+    void mark_fine_participants(std::vector<int> &flag) const { mark_fine(flag, false); }
+
+    // the same for the interactions of the FINE subset that act at the
+    // current positions: bonded ones, and pairs closer than the pair
+    // style's cutoff (not those within the skin only), so that the result
+    // does not depend on when the lists were built
+    void mark_fine_partners(std::vector<int> &flag) const { mark_fine(flag, true); }
 
    private:
     int groupbit, finebit;
@@ -131,6 +137,7 @@ namespace PEJump {
     TopoList topo[4];
 
     int klass(const int *atoms, int n) const;
+    void mark_fine(std::vector<int> &flag, bool acting) const;
     void split_pairs(PairList &);
     void split_topology(TopoList &);
   };

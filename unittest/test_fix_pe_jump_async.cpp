@@ -1239,6 +1239,32 @@ TEST(PEJumpAsync, RestartAcrossClockChangesIsExact)
 }
 
 /* ----------------------------------------------------------------------
+   buffer layers around a dynamic fast group in a liquid: the layers are
+   the partners within the pair cutoff at the node, not the pairs of the
+   neighbor lists (which hold the skin too and depend on when they were
+   built), so a run split at or between coarse nodes, where the next run
+   builds new lists, continues the unbroken one (with the lists' pairs:
+   9e-4 off)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, BufferAroundADynamicGroupIsTheSameInSplitRuns)
+{
+  const auto run = [](const std::vector<std::string> &runs) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"variable zc equal 2.0+0.02*step",
+            "region mov sphere 3.36 3.36 v_zc 1.5 side in units box",
+            "group fast dynamic all region mov every 5", "fix 1 all pe_jump/async 5 fast buffer 1",
+            "timestep 0.002", "thermo 0"});
+    s.cmds(runs);
+    return unwrapped_positions(s);
+  };
+  const auto unbroken = run({"run 60"});
+  EXPECT_LT(max_diff(unbroken, run({"run 35 post no", "run 25"})), 1e-12);
+  EXPECT_LT(max_diff(unbroken, run({"run 37 post no", "run 23"})), 1e-12);
+}
+
+/* ----------------------------------------------------------------------
    fast auto TOL: an atom shot through a lattice of soft bonds at rest goes
    on the fine clock by itself (the fast group is empty); the choice stays
    local, and the momentum stays exact
