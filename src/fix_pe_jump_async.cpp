@@ -484,7 +484,6 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   scheme->fresh = 0;
   changes_seen = 0;
   opened_ahead = 0;
-  assign->start_run();
   check_clocks();
 
   grow_work();
@@ -1320,7 +1319,8 @@ void FixPEJumpAsync::check_clocks()
     error->all(FLERR,
                "Fix pe_jump/async: the atoms on the fine clock changed inside a coarse step "
                "({} of {} fine steps done): change the fast group, or the buffer, only at a "
-               "coarse node (after a multiple of K steps)",
+               "coarse node (after a multiple of K steps); after read_restart, define a dynamic "
+               "fast group again before the fix",
                clocks->done(), clocks->steps());
   if (comm->me == 0)
     utils::logmesg(lmp,

@@ -22,6 +22,7 @@
 #include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_interaction_split.h"
+#include "update.h"
 
 #include <cstdint>
 
@@ -190,7 +191,14 @@ bool ClockAssignment::due(const std::vector<int> *chosen, bigint node, int steps
     return (step >= 0) ? step / every : -((every - 1 - step) / every);
   };
   const bool evaluate = criterion && (updates(node) != updates(node - steps));
-  if (evaluate) criterion->setup(0);
+  if (evaluate) {
+    // as LAMMPS' own update at the end of step node would: a criterion
+    // that reads the step or the time (a moving region) sees the node's
+    const bigint next = update->ntimestep;
+    update->ntimestep = node;
+    criterion->setup(0);
+    update->ntimestep = next;
+  }
   if (!evaluate && !automatic) return false;
   double now[2];
   fast_signature(now, chosen);
@@ -226,14 +234,18 @@ bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
 }
 
 /* ----------------------------------------------------------------------
-   the clock changes of the run, in the log
+   the clock changes of the run, in the log: the coarse nodes of the run at
+   which the clocks were decided (a change at the last node of a run is
+   decided as the next one begins)
 ------------------------------------------------------------------------- */
 
-void ClockAssignment::report(const char *style) const
+void ClockAssignment::report(const char *style)
 {
   if (follows_group() && (comm->me == 0))
     utils::logmesg(lmp, "Fix {}: {} atoms changed clock at {} of {} coarse nodes\n", style,
                    tally[ATOMS], tally[CHANGED], tally[NODES]);
+  // the next run counts anew (one with "pre no" has no setup)
+  tally[ATOMS] = tally[CHANGED] = tally[NODES] = 0;
 }
 
 /* ----------------------------------------------------------------------

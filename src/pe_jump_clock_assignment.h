@@ -57,9 +57,8 @@ namespace PEJump {
     bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
     bool follows_group() const { return dynamic || automatic; }
     // the clock changes of a run (atoms, coarse nodes with a change, coarse
-    // nodes looked at): counted from start_run(), reported in the log
-    void start_run() { tally[ATOMS] = tally[CHANGED] = tally[NODES] = 0; }
-    void report(const char *style) const;
+    // nodes looked at), reported in the log at its end, and counted anew
+    void report(const char *style);
     const std::string &fast_group_name() const { return fast_group; }
     // true if the atoms on the fine clock changed since the last call (global)
     bool changed();
@@ -101,7 +100,7 @@ namespace PEJump {
     double saved_clock[2];    // fine-clock atoms of the last run: number, ID hash
     double fast_seen[2];      // fast group at the last assignment: number, ID hash
     enum { ATOMS, CHANGED, NODES };
-    bigint tally[3];                    // clock changes of the run (see start_run)
+    bigint tally[3];                    // clock changes of the run (see report)
     std::vector<int> slow_flag;         // owned atoms: 1 if on the coarse clock
     std::vector<int> moving_flag;       // owned atoms: 1 if they move on fine steps
     std::vector<int> participant;       // owned and ghost atoms: in a fine interaction

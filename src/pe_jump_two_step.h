@@ -143,6 +143,7 @@ namespace PEJump {
     Census census(const AtomSet &) const;    // global
     Census at_end;                           // at the end of the last run (atoms -1: none)
     bool minimized;                          // an energy minimization since the last run
+    void take_masses();
     std::string changed_since_run(const Census &now, bool new_step_restarts) const;
   };
 

@@ -1076,7 +1076,8 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
   for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
     Sim s(MPI_COMM_WORLD, false);
     moving_region(s, rule);
-    s.cmds({"variable xc equal 2.0+3.0*(step>200)", "thermo 0"});    // changes at node 200
+    // the criterion sees the node's step, as LAMMPS' own update of step 200 would
+    s.cmds({"variable xc equal 2.0+3.0*(step==200)", "thermo 0"});
     // the node of step 200 (positions, velocities, classes) and the
     // cumulative evaluations of every step, in one run
     s.cmds({"fix node all store/state 200 x y vx vy f_1", "fix evals all vector 1 f_1[5]"});
@@ -1194,6 +1195,18 @@ TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated)
   EXPECT_GT(tally[10][1], 15);
   EXPECT_GT(tally[30][1], 3);
   EXPECT_LE(tally[30][1], 10);
+
+  // each run reports its own nodes, also one with "pre no" (no setup)
+  Sim s(MPI_COMM_WORLD, false);
+  bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
+  s.cmds({"bond_coeff 2 1.0 1.0", "variable xc equal 2.0+0.02*step",
+          "region mov sphere v_xc 6.0621778 0 2.5 side in units box",
+          "group fast dynamic all region mov every 10", "fix 1 all pe_jump/async 10 fast",
+          "thermo 0", "run 100 post no"});
+  ::testing::internal::CaptureStdout();
+  s.cmd("run 100 pre no post no");
+  const std::string log = ::testing::internal::GetCapturedStdout();
+  EXPECT_THAT(log, ContainsRegex("atoms changed clock at [0-9]+ of 10 coarse nodes"));
 }
 
 /* ----------------------------------------------------------------------
