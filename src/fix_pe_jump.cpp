@@ -269,9 +269,10 @@ void FixPEJump::initial_integrate(int /*vflag*/)
   // the Verlet loop's forces are taken at the primary node: a force that
   // depends on time (a variable of time, e.g. in fix addforce) must see
   // the node's time, or its impulse is off by h F'/2 per step (first
-  // order). Put back at the end of the step, before anything else looks
+  // order). Put back at the end of the step, before anything else looks.
+  // Another time integrator needs the step end's time for its atoms
   end_time = update->atime;
-  update->atime -= (1.0 - rule->node[rule->primary()]) * h_step;
+  if (!others->integrate_others()) update->atime -= (1.0 - rule->node[rule->primary()]) * h_step;
 }
 
 /* ----------------------------------------------------------------------

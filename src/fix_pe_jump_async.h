@@ -127,9 +127,8 @@ class FixPEJumpAsync : public Fix {
   void refuse_other_fixes() const;
   void check_clocks();
   void start_scheme(const char *, bool);
-  void change_clocks();
+  void change_clocks();    // a dynamic fast group or fast auto, at coarse nodes
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);
-  // a dynamic fast group or fast auto, at coarse nodes
   void choose_fast(std::vector<int> &chosen) const;
   void restart_jumps(const std::vector<int> &to_fine, double **f);
   void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)

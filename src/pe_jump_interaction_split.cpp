@@ -325,19 +325,14 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
   const int nall = atom->nlocal + atom->nghost;
   flag.assign(nall, 0);
 
-  double **x = atom->x;
-  const int *type = atom->type;
-  double **cutsq = force->pair ? force->pair->cutsq : nullptr;
-  for (size_t n = 0; n < cross.size(); n += 2) {
-    const int i = cross[n], j = cross[n + 1];
-    const double dx = x[i][0] - x[j][0];
-    const double dy = x[i][1] - x[j][1];
-    const double dz = x[i][2] - x[j][2];
-    if (cutsq && (dx * dx + dy * dy + dz * dz < cutsq[type[i]][type[j]])) {
-      if (fine(i)) flag[i] = 1;
-      if (fine(j)) flag[j] = 1;
+  if (force->pair)
+    for (size_t n = 0; n < cross.size(); n += 2) {
+      const int i = cross[n], j = cross[n + 1];
+      if (within_cutoff(i, j)) {
+        if (fine(i)) flag[i] = 1;
+        if (fine(j)) flag[j] = 1;
+      }
     }
-  }
 
   for (const auto &t : topo) {
     if (!t.on) continue;
@@ -353,6 +348,20 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
 }
 
 /* ----------------------------------------------------------------------
+   atoms i and j (owned or ghost) closer than the pair style's cutoff
+------------------------------------------------------------------------- */
+
+bool InteractionSplit::within_cutoff(int i, int j) const
+{
+  double **x = atom->x;
+  const int *type = atom->type;
+  const double dx = x[i][0] - x[j][0];
+  const double dy = x[i][1] - x[j][1];
+  const double dz = x[i][2] - x[j][2];
+  return dx * dx + dy * dy + dz * dz < force->pair->cutsq[type[i]][type[j]];
+}
+
+/* ----------------------------------------------------------------------
    the atoms of the FINE interactions: all pairs of the lists, or (acting)
    only those closer than the cutoff
 ------------------------------------------------------------------------- */
@@ -360,21 +369,12 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
 void InteractionSplit::mark_fine(std::vector<int> &flag, bool acting) const
 {
   flag.assign(atom->nlocal + atom->nghost, 0);
-  double **x = atom->x;
-  const int *type = atom->type;
-  double **cutsq = (acting && force->pair) ? force->pair->cutsq : nullptr;
   for (const auto &p : pairs) {
     const auto &part = p.part[FINE];
     for (const int i : part.ilist) {
       for (int jj = 0; jj < part.numneigh[i]; jj++) {
         const int j = part.firstneigh[i][jj] & NEIGHMASK;
-        if (cutsq) {
-          const double dx = x[i][0] - x[j][0];
-          const double dy = x[i][1] - x[j][1];
-          const double dz = x[i][2] - x[j][2];
-          if (dx * dx + dy * dy + dz * dz >= cutsq[type[i]][type[j]]) continue;
-        }
-        flag[i] = flag[j] = 1;
+        if (!acting || within_cutoff(i, j)) flag[i] = flag[j] = 1;
       }
     }
   }

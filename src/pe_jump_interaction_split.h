@@ -138,6 +138,7 @@ namespace PEJump {
 
     int klass(const int *atoms, int n) const;
     void mark_fine(std::vector<int> &flag, bool acting) const;
+    bool within_cutoff(int i, int j) const;    // needs a pair style
     void split_pairs(PairList &);
     void split_topology(TopoList &);
   };

@@ -77,17 +77,7 @@ void TwoStep::init(const char *style)
     error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
                atom->atom_style);
 
-  take_masses();
-}
-
-/* ----------------------------------------------------------------------
-   a division per atom costs more than the rest of the update: the inverse
-   masses per type, at init and again at setup (after the census of the
-   last run has seen whether they changed)
-------------------------------------------------------------------------- */
-
-void TwoStep::take_masses()
-{
+  // a division per atom costs more than the rest of the update
   inverse_mass.assign(atom->ntypes + 1, 0.0);
   if (atom->mass)
     for (int t = 1; t <= atom->ntypes; t++)
@@ -116,7 +106,6 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
                    "(written with other settings or by another version): the two-step scheme "
                    "restarts from the current state\n",
                    style);
-  take_masses();
   const std::string why = changed_since_run(census(set), new_step_restarts);
   if ((all_started > 0) && !why.empty()) {
     all_started = 0;

@@ -59,8 +59,9 @@ namespace PEJump {
     // new_step_restarts: a time step changed since the last run restarts
     // the scheme too (unless the jumps are to be carried over)
     void agree_on_started(const AtomSet &, const char *style, bool new_step_restarts);
-    // the end of a run: the fingerprints of the velocities and the number
-    // of atoms in the group, for the next run to compare
+    // the end of a run: the fingerprints of the velocities and the census
+    // of the group (atoms, positions, masses, time step), for the next run
+    // to compare
     void end_run(const AtomSet &);
     // an energy minimization moves the atoms (Fix::min_setup()): the state
     // belongs to the old positions, the next run restarts the scheme
@@ -143,7 +144,6 @@ namespace PEJump {
     Census census(const AtomSet &) const;    // global
     Census at_end;                           // at the end of the last run (atoms -1: none)
     bool minimized;                          // an energy minimization since the last run
-    void take_masses();
     std::string changed_since_run(const Census &now, bool new_step_restarts) const;
   };
 

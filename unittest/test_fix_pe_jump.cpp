@@ -638,6 +638,33 @@ TEST(PEJump, DeletedAtomsRestartTheScheme)
   }
 }
 
+namespace {
+// the LJ liquid with a fast sphere: the commands before, a change between
+// runs, then 20 steps, once with the fix continued (its log must say why
+// the scheme restarts) and once with the fix defined anew after the change;
+// the largest difference of the positions
+double continued_against_redefined(const std::string &fix, const std::vector<std::string> &before,
+                                   const std::string &change, const std::string &why)
+{
+  std::vector<double> x[2];
+  for (const int redefine : {0, 1}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s);
+    s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
+            "fix 1 all " + fix, "timestep 0.002", "thermo 0"});
+    s.cmds(before);
+    s.cmd(change);
+    if (redefine) s.cmds({"unfix 1", "fix 1 all " + fix});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 20 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    if (!redefine) EXPECT_THAT(out, ContainsRegex(why)) << fix;
+    x[redefine] = unwrapped_positions(s);
+  }
+  return max_diff(x[0], x[1]);
+}
+}    // namespace
+
 /* ----------------------------------------------------------------------
    an energy minimization between runs moves the atoms and leaves the
    velocities: the jumps (and Lobatto start-node forces) belong to the old
@@ -650,24 +677,11 @@ TEST(PEJump, MinimizationBetweenRunsRestartsTheScheme)
 {
   for (const std::string fix :
        {"pe_jump", "pe_jump quadrature lobatto 2", "pe_jump quadrature lobatto 3",
-        "pe_jump/async 5 fast", "pe_jump/async 5 fast quadrature lobatto 3"}) {
-    std::vector<double> x[2];
-    for (const int redefine : {0, 1}) {
-      Sim s(MPI_COMM_WORLD, false);
-      lj_liquid(s);
-      s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
-              "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 50 post no",
-              "minimize 0 1e-8 20 20"});
-      if (redefine) s.cmds({"unfix 1", "fix 1 all " + fix});
-      ::testing::internal::CaptureStdout();
-      s.cmd("run 20 post no");
-      const std::string out = ::testing::internal::GetCapturedStdout();
-      if (!redefine)
-        EXPECT_THAT(out, ContainsRegex("energy minimization since the last run")) << fix;
-      x[redefine] = unwrapped_positions(s);
-    }
-    EXPECT_LT(max_diff(x[0], x[1]), 1e-12) << fix;
-  }
+        "pe_jump/async 5 fast", "pe_jump/async 5 fast quadrature lobatto 3"})
+    EXPECT_LT(continued_against_redefined(fix, {"run 50 post no"}, "minimize 0 1e-8 20 20",
+                                          "energy minimization since the last run"),
+              1e-12)
+        << fix;
 }
 
 /* ----------------------------------------------------------------------
@@ -703,32 +717,25 @@ TEST(PEJump, AtomsJoiningTheGroupRestartTheScheme)
 
 TEST(PEJump, AtomsMovedBetweenRunsRestartTheScheme)
 {
+  const std::vector<std::string> before = {"run 300 post no", "balance 1.0 shift x 5 1.1"};
   for (const std::string fix :
        {"pe_jump", "pe_jump quadrature lobatto 3", "pe_jump/async 5 fast"}) {
-    std::vector<double> x[2];
-    for (const int redefine : {0, 1}) {
+    {
       Sim s(MPI_COMM_WORLD, false);
       lj_liquid(s);
       s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
-              "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 300 post no",
-              "balance 1.0 shift x 5 1.1"});
+              "fix 1 all " + fix, "timestep 0.002", "thermo 0"});
+      s.cmds(before);
       ::testing::internal::CaptureStdout();
       s.cmd("run 5 post no");
       const std::string quiet = ::testing::internal::GetCapturedStdout();
       EXPECT_THAT(quiet, ::testing::Not(ContainsRegex("restarts"))) << fix;
-      s.cmd("displace_atoms all random 0.01 0.01 0.01 4711");
-      if (redefine) s.cmds({"unfix 1", "fix 1 all " + fix});
-      ::testing::internal::CaptureStdout();
-      s.cmd("run 20 post no");
-      const std::string out = ::testing::internal::GetCapturedStdout();
-      if (!redefine)
-        EXPECT_THAT(
-            out,
-            ContainsRegex("atoms of the group were moved \\(or renumbered\\) since the last run"))
-            << fix;
-      x[redefine] = unwrapped_positions(s);
     }
-    EXPECT_LT(max_diff(x[0], x[1]), 1e-12) << fix;
+    EXPECT_LT(continued_against_redefined(
+                  fix, before, "displace_atoms all random 0.01 0.01 0.01 4711",
+                  "atoms of the group were moved \\(or renumbered\\) since the last run"),
+              1e-12)
+        << fix;
   }
 }
 

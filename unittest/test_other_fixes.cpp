@@ -119,6 +119,17 @@ TEST(PEJumpOtherFixes, TimeDependentForcesAreSecondOrder)
     EXPECT_LT(coarse, 2.0 * nve) << rule;
     EXPECT_GT(coarse / fine, 3.5) << rule;    // second order: 4
   }
+
+  // beside fix nve on other atoms the time stays the step end's, which the
+  // atoms of fix nve need: they move as in a run with fix nve alone
+  Sim s;
+  ideal_gas(s);
+  s.cmds({"velocity all set 0 0 0", "group a id 1:10", "group b id 11:20", "fix 1 a pe_jump",
+          "fix 3 b nve", "variable fx equal sin(2*time)", "fix 2 all addforce v_fx 0 0",
+          "timestep 0.01", "variable xb equal xcm(b,x)", "thermo 0"});
+  const double x0 = s.eval("v_xb");
+  s.cmd("run 100 post no");
+  EXPECT_NEAR(std::fabs(s.eval("v_xb") - x0 - 0.5 * (0.5 - std::sin(2.0) / 4.0)), nve, 1e-12);
 }
 
 /* ----------------------------------------------------------------------
