@@ -650,7 +650,8 @@ bool FixPEJump::may_open_ahead() const
 
 void FixPEJump::tally_at_node()
 {
-  evals_step += nodes->at_step_end(others->step_observed());
+  evals_step +=
+      nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
 }
 
 /* ----------------------------------------------------------------------

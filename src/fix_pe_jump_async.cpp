@@ -989,7 +989,8 @@ void FixPEJumpAsync::final_integrate()
   if (!coarse_end && others->step_observed()) catch_up_all();
 
   split->activate(InteractionSplit::ALL);
-  evals_step += nodes->at_step_end(others->step_observed());
+  evals_step +=
+      nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
   split->restore();
   if (nodes->step_tallies()) first->forces_written();    // on every atom
   evals_total += evals_step;

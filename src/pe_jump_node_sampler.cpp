@@ -168,10 +168,23 @@ double NodeSampler::memory_usage() const
 
 /* ---------------------------------------------------------------------- */
 
-double NodeSampler::at_step_end(bool observed)
+double NodeSampler::at_step_end(bool observed, int groupbit)
 {
   if (step_tallies()) {
+    const int *mask = atom->mask;
+    double **f = atom->f;
+    std::vector<double> others;    // forces of the atoms outside the group
+    if (groupbit)
+      for (int i = 0; i < atom->nlocal; i++)
+        if (!(mask[i] & groupbit)) others.insert(others.end(), f[i], f[i] + 3);
     sampler->compute(ForceSampler::ALL, eflag_step, vflag_step);
+    if (groupbit) {
+      f = atom->f;
+      size_t n = 0;
+      for (int i = 0; i < atom->nlocal; i++)
+        if (!(mask[i] & groupbit))
+          for (int k = 0; k < 3; k++) f[i][k] = others[n++];
+    }
     return 1.0;
   }
   if (observed) comm->forward_comm();

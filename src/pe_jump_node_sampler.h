@@ -110,8 +110,10 @@ namespace PEJump {
     // the atoms are at the step end, the forces were taken elsewhere: on
     // steps that tally energy or virial evaluate everything there (the
     // forces there replace the others; returns 1 evaluation), else bring
-    // the ghosts there if observed (returns 0)
-    double at_step_end(bool observed);
+    // the ghosts there if observed (returns 0). The owned atoms outside
+    // the group of groupbit (0: none) keep the forces of the MD step,
+    // which another time integrator of theirs applies after this fix
+    double at_step_end(bool observed, int groupbit);
     bool tally_step() const;    // the step about to begin tallies energy or virial
 
     // potential energy of the contributions in mask at the current
