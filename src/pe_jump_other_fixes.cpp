@@ -62,6 +62,13 @@ void OtherFixes::sort(ForceSampler &sampler)
                  "Fix {} cannot be combined with the constraints of fix {} ({}): they assume the "
                  "velocity Verlet update of fix nve. Use fix nve, or remove the constraints",
                  self->style, ifix->id, ifix->style);
+    // of the langevin fixes only the GJF variant acts before the step
+    if (utils::strmatch(ifix->style, "^langevin") && (mask & INITIAL_INTEGRATE))
+      error->all(FLERR,
+                 "Fix {} cannot be combined with fix {} ({}) with keyword gjf: the GJF "
+                 "thermostat rewrites velocities and forces for the velocity Verlet update of "
+                 "fix nve. Use fix langevin without gjf, or fix nve",
+                 self->style, ifix->id, ifix->style);
     if (projects)
       projections.push_back(ifix);
     else if (mask & POST_FORCE)
