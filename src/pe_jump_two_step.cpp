@@ -165,37 +165,66 @@ void TwoStep::open(const AtomSet &set, bool fingerprint) const
 
 void TwoStep::jump_loop(const AtomSet &set, double **favg, const Loop &step, double *mag) const
 {
+  // the options are fixed for the whole loop: one instance each, so that
+  // the inner loop carries no tests (it is the fine steps' per-atom cost)
+  const bool ahead = step.ahead >= 0.0;
+  const bool sample = step.fsample != nullptr;
+  if (ahead && !sample && !step.fingerprint)
+    jump_loop_as<true, false, false>(set, favg, step, mag);
+  else if (!ahead && !sample && !step.fingerprint)
+    jump_loop_as<false, false, false>(set, favg, step, mag);
+  else if (!ahead && !sample)
+    jump_loop_as<false, false, true>(set, favg, step, mag);
+  else
+    jump_loop_as<true, true, true>(set, favg, step, mag);
+}
+
+/* ----------------------------------------------------------------------
+   AHEAD: the next step begins (step.ahead >= 0), SAMPLE: start-node forces
+   are taken (step.fsample), SIGN: fingerprints; each only tested at run
+   time where the instance does not fix it
+------------------------------------------------------------------------- */
+
+template <bool AHEAD, bool SAMPLE, bool SIGN>
+void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, double *mag) const
+{
   double **x = atom->x;
   double **v = atom->v;
   double **jmp_all = jump();
-  double **fstart = step.fsample ? this->fstart() : nullptr;
+  double **fstart = (SAMPLE && step.fsample) ? this->fstart() : nullptr;
   double **fsample = step.fsample;
-  double *sig = step.fingerprint ? vsig() : nullptr;
+  double *sig = (SIGN && step.fingerprint) ? vsig() : nullptr;
+  const bool ahead = !AHEAD || (step.ahead >= 0.0);
   const double *rmass = atom->rmass;
   const double *minv = inverse_mass.data();
   const int *type = atom->type;
   const double kick = 2.0 * step.h * force->ftm2v;
-  const double rest = step.rest, ahead = step.ahead;
+  const double rest = step.rest, dt_ahead = step.ahead;
   double vv = mag[0], jj = mag[1];
   set.each(atom->mask, atom->nlocal, [&](int i) {
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
-    double vh[3] = {v[i][0], v[i][1], v[i][2]};
-    double jmp[3] = {jmp_all[i][0], jmp_all[i][1], jmp_all[i][2]};
-    double vnew[3];
+    double *xi = x[i], *vi = v[i], *ji = jmp_all[i];
+    const double *fi = favg[i];
+    double vh[3] = {vi[0], vi[1], vi[2]};
+    double jmp[3] = {ji[0], ji[1], ji[2]};
+    double xn[3], vnew[3];
     for (int k = 0; k < 3; k++) {
-      double xk = x[i][k] + rest * vh[k];
-      vnew[k] = jump_component(dtfm * favg[i][k], vh[k], jmp[k]);
-      if (ahead >= 0.0) {
+      xn[k] = xi[k] + rest * vh[k];
+      vnew[k] = jump_component(dtfm * fi[k], vh[k], jmp[k]);
+      if (AHEAD && ahead) {
         vh[k] += 0.5 * jmp[k];
-        xk += ahead * vh[k];
+        xn[k] += dt_ahead * vh[k];
       }
-      x[i][k] = xk;
-      v[i][k] = vh[k];
-      jmp_all[i][k] = jmp[k];
-      if (fstart) fstart[i][k] = fsample[i][k];
     }
+    for (int k = 0; k < 3; k++) {
+      xi[k] = xn[k];
+      vi[k] = vh[k];
+      ji[k] = jmp[k];
+    }
+    if (SAMPLE && fstart)
+      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
     // (no fingerprint when a step begins ahead: nothing may change v then)
-    if (sig) sig[i] = velocity_fingerprint(v[i]);
+    if (SIGN && sig) sig[i] = velocity_fingerprint(vi);
     vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
     jj = MAX(jj, jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
   });

@@ -125,6 +125,8 @@ namespace PEJump {
     void forget_energies() { cached_step = -1; }
 
    private:
+    template <bool AHEAD, bool SAMPLE, bool SIGN>
+    void jump_loop_as(const AtomSet &, double **favg, const Loop &, double *mag) const;
     AtomState &state;
     int JUMP, VSIG, FSTART;
     std::vector<double> inverse_mass;
