@@ -196,11 +196,12 @@ void FixPEJump::init()
     delete rule;
     rule = other;
   }
-  // other fixes that add forces or change velocities (thermostats above
-  // all) drive the parasitic period-2 mode, which the scheme does not damp:
-  // damp it over the damp time (auto: AUTO_DAMP_STEPS steps, from the start if
-  // fixes add forces, else from the first step where a velocity changed)
-  damping->init(opts.damp_time, update->dt, others->add_forces());
+  // thermostats drive the parasitic period-2 mode, which the scheme does
+  // not damp: damp it over the damp time (auto: beside thermostats only,
+  // over AUTO_STEPS steps, from the start if one adds forces, else from
+  // the first step where a velocity changed)
+  damping->init(opts.damp_time, update->dt, others->thermostats() > 0,
+                others->thermostat_forces() > 0);
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);

@@ -29,7 +29,7 @@ using namespace FixConst;
 /* ---------------------------------------------------------------------- */
 
 OtherFixes::OtherFixes(LAMMPS *lmp, Fix *fix) :
-    Pointers(lmp), self(fix), nadders(0), others_bits(0), hooks(0)
+    Pointers(lmp), self(fix), nadders(0), nthermostats(0), nforcing(0), others_bits(0), hooks(0)
 {
 }
 
@@ -42,7 +42,7 @@ OtherFixes::OtherFixes(LAMMPS *lmp, Fix *fix) :
 void OtherFixes::sort(ForceSampler &sampler)
 {
   std::vector<Fix *> preparations, projections;
-  nadders = others_bits = hooks = 0;
+  nadders = nthermostats = nforcing = others_bits = hooks = 0;
   end_of_step_every.clear();
   for (auto *ifix : modify->get_fix_list()) {
     if (ifix == self) continue;
@@ -69,6 +69,11 @@ void OtherFixes::sort(ForceSampler &sampler)
                  "thermostat rewrites velocities and forces for the velocity Verlet update of "
                  "fix nve. Use fix langevin without gjf, or fix nve",
                  self->style, ifix->id, ifix->style);
+    // a thermostat anywhere in the system: the run does not conserve energy
+    if (ifix->ecouple_flag || utils::strmatch(ifix->style, "^ttm")) {
+      ++nthermostats;
+      if (mask & POST_FORCE) ++nforcing;
+    }
     if (projects)
       projections.push_back(ifix);
     else if (mask & POST_FORCE)

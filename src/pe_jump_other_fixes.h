@@ -41,6 +41,11 @@ namespace PEJump {
 
     void sort(ForceSampler &);    // at init
     bool add_forces() const { return nadders > 0; }
+    // thermostats in the run (fixes that report the energy they exchange
+    // with a reservoir, and the two-temperature models), and how many of
+    // them add forces (random ones: fix langevin, fix ttm)
+    int thermostats() const { return nthermostats; }
+    int thermostat_forces() const { return nforcing; }
     bool may_change_velocities(int when) const { return (hooks & when) != 0; }
     bool integrate_others() const { return others_bits != 0; }
 
@@ -57,6 +62,8 @@ namespace PEJump {
    private:
     Fix *self;
     int nadders;        // fixes that add forces
+    int nthermostats;   // fixes that thermostat (see thermostats())
+    int nforcing;       // those of them that add forces
     int others_bits;    // group bits of the other time integrators
     int hooks;          // hooks of other fixes that may change velocities
     std::vector<int> end_of_step_every;

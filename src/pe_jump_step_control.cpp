@@ -35,15 +35,16 @@ static constexpr int ADAPT_BISECT = 40;         // bisections of the largest adm
 
 /* ---------------------------------------------------------------------- */
 
-void ParasiticDamping::init(double damp_time, double dt, bool adders)
+void ParasiticDamping::init(double damp_time, double dt, bool thermostats, bool forcing)
 {
   automatic = (damp_time < 0.0);
+  thermostatted = thermostats;
   rate = 0.0;
   if (damp_time > 0.0)
     rate = 1.0 / damp_time;
   else if (automatic)
     rate = 1.0 / (AUTO_STEPS * dt);
-  on = (damp_time > 0.0) || (automatic && adders);
+  on = (damp_time > 0.0) || (automatic && thermostats && forcing);
   impulse = 0;
 }
 
@@ -60,7 +61,7 @@ int ParasiticDamping::take_impulse()
 
 void ParasiticDamping::impulse_anywhere(bool seen)
 {
-  if (seen && automatic) on = true;
+  if (seen && automatic && thermostatted) on = true;
 }
 
 /* ---------------------------------------------------------------------- */

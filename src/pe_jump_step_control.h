@@ -25,19 +25,23 @@ namespace PEJump {
   // quadrature-averaged forces of the last two steps, which are kept as
   // per-atom history in the fix's state table only if one of them is on.
 
-  // Damping of the parasitic period-2 mode (damp keyword), which other
-  // fixes that add forces or change velocities (thermostats above all)
-  // drive: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps the smooth
-  // jump h a and multiplies the alternating one by -(1 - beta). damp auto:
-  // over AUTO_STEPS steps, from the start if fixes add forces, else from
-  // the first step where another fix changed a velocity.
+  // Damping of the parasitic period-2 mode (damp keyword), which
+  // thermostats drive (random forces, stochastic or repeated velocity
+  // rescaling): [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps the
+  // smooth jump h a and multiplies the alternating one by -(1 - beta).
+  // damp auto: over AUTO_STEPS steps, beside a thermostat only (from the
+  // start if it adds forces, else from the first step where a velocity
+  // changed). A damping time of AUTO_STEPS steps makes the scheme first
+  // order, which a thermostatted run absorbs; a run that conserves energy
+  // (fix momentum, heat exchange, external forces, ...) is left undamped.
 
   class ParasiticDamping {
    public:
     static constexpr double AUTO_STEPS = 1000.0;
 
-    // damp_time < 0: auto, 0: off; dt the time step, adders: fixes add forces
-    void init(double damp_time, double dt, bool adders);
+    // damp_time < 0: auto, 0: off; dt the time step; thermostats: fixes
+    // that thermostat this fix's atoms (forcing: one of them adds forces)
+    void init(double damp_time, double dt, bool thermostats, bool forcing);
     void impulse_here() { impulse = 1; }
     int take_impulse();                  // this rank's impulse flag, cleared
     void impulse_anywhere(bool seen);    // the flag reduced over the ranks
@@ -45,7 +49,7 @@ namespace PEJump {
     double beta(double h) const;
 
    private:
-    bool automatic = true, on = false;
+    bool automatic = true, on = false, thermostatted = false;
     double rate = 0.0;
     int impulse = 0;
   };
