@@ -202,6 +202,7 @@ void FixPEJump::init()
   // the first step where a velocity changed)
   damping->init(opts.damp_time, update->dt, others->thermostats() > 0,
                 others->thermostat_forces() > 0);
+  others->refuse_for_rule(rule->name(), rule->node[rule->primary()] == 1.0, rule->only_end_nodes());
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
@@ -247,6 +248,7 @@ void FixPEJump::setup(int /*vflag*/)
                      style);
   }
   scheme->fresh = 0;
+  others->refuse_shared_atoms();
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pseudo_energy_now());
   if (automatic) automatic->start_run(*nodes, opts.sample_mask);

@@ -82,6 +82,66 @@ void OtherFixes::sort(ForceSampler &sampler)
   sampler.set_hooks(preparations, projections);
 }
 
+/* ---------------------------------------------------------------------- */
+
+void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_end,
+                                 bool only_end_nodes) const
+{
+  bool after = false;
+  for (auto *ifix : modify->get_fix_list()) {
+    if (ifix == self) {
+      after = true;
+      continue;
+    }
+    const int mask = ifix->setmask();
+    // fix langevin acts at the end of the step only with tally yes (gjf is
+    // refused in sort())
+    if (!primary_at_end && utils::strmatch(ifix->style, "^langevin") && (mask & END_OF_STEP))
+      error->all(FLERR,
+                 "Fix {} with quadrature {} gives the Langevin impulse at the centre of the step, "
+                 "but fix {} ({}) with keyword tally yes counts the energy it exchanges as for "
+                 "velocity Verlet (half the impulse at each end of the step), so its tally would "
+                 "be wrong. Use quadrature lobatto 2 or 3, or tally no",
+                 self->style, rule_name, ifix->id, ifix->style);
+    if (!primary_at_end && after && (mask & INITIAL_INTEGRATE) && !ifix->time_integrate)
+      error->all(FLERR,
+                 "Fix {} ({}) acts in initial_integrate after fix {}, where fix nve leaves its "
+                 "atoms at the end of the step; with quadrature {} fix {} leaves them at the "
+                 "centre of the step there, which fix {} would take for the end. Use quadrature "
+                 "lobatto 2 or 3 (the forces are taken at the step end), or define fix {} before "
+                 "fix {}",
+                 ifix->id, ifix->style, self->id, rule_name, self->id, ifix->id, ifix->id,
+                 self->id);
+    if (!only_end_nodes && ifix->time_integrate && ifix->box_change)
+      error->all(FLERR,
+                 "Fix {} with quadrature {}: fix {} ({}) integrates other atoms and changes the "
+                 "box inside the step, rescaling the positions of all atoms, so the forces at "
+                 "the nodes inside the step would mix times. Use quadrature lobatto 2 (forces at "
+                 "the step ends only)",
+                 self->style, rule_name, ifix->id, ifix->style);
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void OtherFixes::refuse_shared_atoms() const
+{
+  const int *mask = atom->mask;
+  for (auto *ifix : modify->get_fix_list()) {
+    if ((ifix == self) || !ifix->time_integrate) continue;
+    const int both = self->groupbit | ifix->groupbit;
+    bigint local = 0, shared = 0;
+    for (int i = 0; i < atom->nlocal; i++)
+      if ((mask[i] & both) == both) ++local;
+    MPI_Allreduce(&local, &shared, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+    if (shared > 0)
+      error->all(FLERR,
+                 "Fix {} must be the only time integration fix acting on its atoms: {} of them "
+                 "are integrated by fix {} ({}) too. Give the two fixes separate groups",
+                 self->style, shared, ifix->id, ifix->style);
+  }
+}
+
 /* ----------------------------------------------------------------------
    fixes that set, average or project the forces instead of adding to them
 ------------------------------------------------------------------------- */

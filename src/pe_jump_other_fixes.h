@@ -16,6 +16,7 @@
 
 #include "fix.h"
 
+#include <string>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -57,15 +58,28 @@ namespace PEJump {
     // time integrator (collective)
     void refuse_interactions(const char *rule_name) const;
 
+    // fixes that rely on where fix nve leaves the atoms inside a step,
+    // checked at init against the rule: fix langevin with tally yes and
+    // fixes acting in initial_integrate after this fix (they take this
+    // fix's atoms at the step end: the primary node must be there), and
+    // time integrators that change the box (barostats, which rescale all
+    // positions inside the step: only the step ends may be nodes)
+    void refuse_for_rule(const std::string &rule_name, bool primary_at_end,
+                         bool only_end_nodes) const;
+
+    // an error if atoms of this fix are integrated by another fix too
+    // (collective; at setup)
+    void refuse_shared_atoms() const;
+
     static bool replaces_forces(const Fix *);
 
    private:
     Fix *self;
-    int nadders;        // fixes that add forces
-    int nthermostats;   // fixes that thermostat (see thermostats())
-    int nforcing;       // those of them that add forces
-    int others_bits;    // group bits of the other time integrators
-    int hooks;          // hooks of other fixes that may change velocities
+    int nadders;         // fixes that add forces
+    int nthermostats;    // fixes that thermostat (see thermostats())
+    int nforcing;        // those of them that add forces
+    int others_bits;     // group bits of the other time integrators
+    int hooks;           // hooks of other fixes that may change velocities
     std::vector<int> end_of_step_every;
   };
 
