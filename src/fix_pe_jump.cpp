@@ -534,7 +534,6 @@ void FixPEJump::pre_reverse(int eflag, int vflag)
 
 void FixPEJump::final_integrate()
 {
-  update->atime = end_time;
   grow_work();
   evals_step = 1.0;
 
@@ -544,7 +543,11 @@ void FixPEJump::final_integrate()
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
   const bool direct = (rule->size() == 1) && !split_primary() && !steps->adapts();
+  // the nodes are sampled at their own times (from the primary node's)
+  nodes->time_follows_nodes(!others->integrate_others());
   if (!direct) quadrature_sum();
+  nodes->time_follows_nodes(false);
+  update->atime = end_time;
   double **favg = direct ? atom->f : fsum();
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;

@@ -30,6 +30,7 @@
 #include "atom.h"
 #include "bond.h"
 #include "comm.h"
+#include "domain.h"
 #include "error.h"
 #include "force.h"
 #include "group.h"
@@ -260,6 +261,30 @@ void FixPEJumpAsync::refuse_other_fixes() const
                  "Fix pe_jump/async must be the only time integration fix (found fix {} {}): "
                  "atoms outside its group are frozen scenery",
                  ifix->id, ifix->style);
+
+  // a force field that changes during the run (fix adapt) would be sampled
+  // at the fine and the coarse nodes at other times than theirs; fixes that
+  // act in initial_integrate (fix recenter, fix tmd) take the atoms for
+  // being at the step end, where neither clock leaves them
+  for (const auto &ifix : modify->get_fix_list())
+    if ((ifix != this) && !ifix->time_integrate &&
+        (utils::strmatch(ifix->style, "^adapt") || (ifix->setmask() & INITIAL_INTEGRATE)))
+      error->all(FLERR,
+                 "Fix pe_jump/async cannot yet be combined with fix {} ({}), which {}. Use fix "
+                 "pe_jump",
+                 ifix->id, ifix->style,
+                 utils::strmatch(ifix->style, "^adapt")
+                     ? "changes the force field during the run: the fine and the coarse forces "
+                       "are sampled at different times"
+                     : "acts on the atoms in initial_integrate, where they are inside their "
+                       "steps on two clocks");
+  // fix deform with remap v changes the velocity of an atom that crosses a
+  // periodic boundary, which a slow atom cannot take inside its step
+  if (domain->deform_vremap)
+    error->all(FLERR,
+               "Fix pe_jump/async cannot yet be combined with fix deform with remap v, which "
+               "changes the velocities of atoms that cross a periodic boundary. Use remap x, or "
+               "fix pe_jump");
 
   // the fine and coarse forces of a slow atom are sampled apart, so another
   // fix cannot act on its total force; only fix enforce2d (which zeroes a

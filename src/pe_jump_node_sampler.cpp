@@ -31,7 +31,7 @@ using namespace LAMMPS_NS::PEJump;
 
 NodeSampler::NodeSampler(LAMMPS *lmp, ForceSampler *forces) :
     Pointers(lmp), sampler(forces), xkept(nullptr), fkept(nullptr), nkept(0), keeping(false),
-    eflag_step(0), vflag_step(0)
+    shift_time(false), eflag_step(0), vflag_step(0)
 {
 }
 
@@ -119,7 +119,10 @@ void NodeSampler::evaluate_at(double shift, const FreeFlight &v, const AtomSet &
     for (int k = 0; k < 3; k++) x[i][k] = xkept[i][k] + shift * v(i, k);
   };
   set.each(atom->mask, atom->nlocal, move);
+  const double now = update->atime;
+  if (shift_time) update->atime = now + shift;
   sampler->compute(mask, 0, 0);
+  update->atime = now;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -86,8 +86,12 @@ namespace PEJump {
     };
 
     // move the atoms of set to x + shift v and compute the contributions in
-    // mask there (forces only); needs a Keep with their positions
+    // mask there (forces only); needs a Keep with their positions. If the
+    // time follows the nodes, the simulation time is the kept positions'
+    // time + shift meanwhile (a force field that changes with time, e.g.
+    // under fix adapt, sees each node's time)
     void evaluate_at(double shift, const FreeFlight &v, const AtomSet &set, int mask);
+    void time_follows_nodes(bool on) { shift_time = on; }
 
     // acc += sum_k w_k F(q_k) over the nodes k = first .. last of rule but
     // skip, q_k = x + (scale c_k + offset) v for the atoms of set (the others
@@ -128,6 +132,7 @@ namespace PEJump {
     double **xkept, **fkept;
     int nkept;    // room for this many owned atoms
     bool keeping;
+    bool shift_time;
     int eflag_step, vflag_step;
     void make_room();
   };
