@@ -173,10 +173,18 @@ void FixPEJump::init()
   // only; pe_jump/async handles the atoms outside it
   PEJump::FirstGroup(lmp).require_all(groupbit, style);
   if (steps->adapts())
-    for (const auto &ifix : modify->get_fix_list())
+    for (const auto &ifix : modify->get_fix_list()) {
       if (utils::strmatch(ifix->style, "^dt/reset"))
         error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them",
                    style, ifix->id, ifix->style);
+      // (fix nve with fix dt/reset has the same problem in LAMMPS)
+      if (utils::strmatch(ifix->style, "^deform"))
+        error->all(FLERR,
+                   "Fix {} adapt changes the time step, but fix {} ({}) changes the box by the "
+                   "step count, as if the step were constant: the box would run ahead of or "
+                   "behind the time. Use a fixed time step with fix deform",
+                   style, ifix->id, ifix->style);
+    }
 
   others->sort(*sampler);
   sampler->refuse_velocity_forces(style, rule->name(), rule->only_end_nodes());
