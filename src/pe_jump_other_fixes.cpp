@@ -103,7 +103,10 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
                  "velocity Verlet (half the impulse at each end of the step), so its tally would "
                  "be wrong. Use quadrature lobatto 2 or 3, or tally no",
                  self->style, rule_name, ifix->id, ifix->style);
-    if (!primary_at_end && after && (mask & INITIAL_INTEGRATE) && !ifix->time_integrate)
+    // (fix ti/spring only updates its coupling parameter there)
+    const bool moves_atoms = (mask & INITIAL_INTEGRATE) && !ifix->time_integrate &&
+        !utils::strmatch(ifix->style, "^ti/spring") && !utils::strmatch(ifix->style, "^dummy");
+    if (!primary_at_end && after && moves_atoms)
       error->all(FLERR,
                  "Fix {} ({}) acts in initial_integrate after fix {}, where fix nve leaves its "
                  "atoms at the end of the step; with quadrature {} fix {} leaves them at the "
