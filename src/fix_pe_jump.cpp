@@ -210,6 +210,7 @@ void FixPEJump::init()
   // the first step where a velocity changed)
   damping->init(opts.damp_time, update->dt, others->thermostats() > 0,
                 others->thermostat_forces() > 0);
+  others->refuse_shared_atoms();
   others->refuse_for_rule(rule->name(), rule->node[rule->primary()] == 1.0, rule->only_end_nodes());
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))

@@ -117,10 +117,10 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
                  self->id);
     if (!only_end_nodes && ifix->time_integrate && ifix->box_change)
       error->all(FLERR,
-                 "Fix {} with quadrature {}: fix {} ({}) integrates other atoms and changes the "
-                 "box inside the step, rescaling the positions of all atoms, so the forces at "
-                 "the nodes inside the step would mix times. Use quadrature lobatto 2 (forces at "
-                 "the step ends only)",
+                 "Fix {} with quadrature {}: fix {} ({}) changes the box inside the step while "
+                 "it integrates its atoms, rescaling the positions of all atoms, so the forces "
+                 "at the nodes inside the step would mix times. Use quadrature lobatto 2 (forces "
+                 "at the step ends only)",
                  self->style, rule_name, ifix->id, ifix->style);
   }
 }
