@@ -504,6 +504,13 @@ void FixPEJumpAsync::setup(int /*vflag*/)
                "Fix pe_jump/async cannot split pair style {}: it computes forces that are not in "
                "its neighbor lists (e.g. from partner lists of its own). Use fix pe_jump",
                force->pair_style);
+  if (!split->pair_forces_stay_on_pairs())
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split pair style {}: the force of a pair acts on other "
+               "atoms than the two of the pair (e.g. on the hydrogen of a hydrogen bond, or on "
+               "the atoms of TIP4P molecules), which the split cannot put on their clocks. Use "
+               "fix pe_jump",
+               force->pair_style);
   // start nodes of slow atoms inside a coarse step cannot be taken again:
   // new atoms take theirs at their first evaluation
   scheme->fresh = 0;

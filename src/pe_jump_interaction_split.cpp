@@ -22,6 +22,7 @@
 #include "utils.h"
 
 #include <algorithm>
+#include <utility>
 
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
@@ -261,6 +262,69 @@ bool InteractionSplit::pair_stays_in_lists()
   for (int n = 0; n < nvalues; n++)
     if (f[0][n] != 0.0) local = 1;
   if (nvalues) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
+  int global = 0;
+  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
+  return !global;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool InteractionSplit::pair_forces_stay_on_pairs()
+{
+  if (!force->pair || !force->pair->compute_flag || pairs.empty()) return true;
+  restore();
+  double **f = atom->f;
+  double **x = atom->x;
+  const int *type = atom->type;
+  const int ntypes = atom->ntypes;
+  const int nall = atom->nlocal + atom->nghost;
+  std::vector<double> fkeep(3 * nall);
+  if (nall) std::copy(&f[0][0], &f[0][0] + 3 * nall, fkeep.begin());
+  int local = 0;
+  for (auto &p : pairs) {
+    NeighList *list = p.list;
+    if (list->requestor_type != NeighList::PAIR) continue;
+    auto *style = static_cast<Pair *>(list->requestor);
+    if (!style) continue;
+    // per pair of atom types, the closest pair of the list: i and its raw
+    // neighbor entry (a style may treat types differently, e.g. TIP4P)
+    std::vector<double> best((ntypes + 1) * (ntypes + 1), -1.0);
+    std::vector<std::pair<int, int>> chosen(best.size(), {-1, -1});
+    for (int ii = 0; ii < list->inum; ii++) {
+      const int i = list->ilist[ii];
+      for (int jj = 0; jj < list->numneigh[i]; jj++) {
+        const int j = list->firstneigh[i][jj] & NEIGHMASK;
+        double r2 = 0.0;
+        for (int k = 0; k < 3; k++) r2 += (x[i][k] - x[j][k]) * (x[i][k] - x[j][k]);
+        const int t = MIN(type[i], type[j]) * (ntypes + 1) + MAX(type[i], type[j]);
+        if ((best[t] < 0.0) || (r2 < best[t])) {
+          best[t] = r2;
+          chosen[t] = {i, list->firstneigh[i][jj]};
+        }
+      }
+    }
+    for (const auto &ij : chosen) {
+      if (ij.first < 0) continue;
+      // the list cut to that pair, evaluated by its style alone
+      const int i = ij.first, j = ij.second & NEIGHMASK;
+      const int inum = list->inum, n_i = list->numneigh[i];
+      int *ilist = list->ilist, *neigh_i = list->firstneigh[i];
+      int one_i = i, one_j = ij.second;
+      list->inum = 1;
+      list->ilist = &one_i;
+      list->numneigh[i] = 1;
+      list->firstneigh[i] = &one_j;
+      if (nall) std::fill(&f[0][0], &f[0][0] + 3 * nall, 0.0);
+      style->compute(0, 0);
+      list->inum = inum;
+      list->ilist = ilist;
+      list->numneigh[i] = n_i;
+      list->firstneigh[i] = neigh_i;
+      for (int n = 0; n < nall; n++)
+        if ((n != i) && (n != j) && (f[n][0] != 0.0 || f[n][1] != 0.0 || f[n][2] != 0.0)) local = 1;
+    }
+  }
+  if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   return !global;

@@ -69,6 +69,11 @@ namespace PEJump {
     // evaluated once with empty lists, it must give no force (a style with
     // partner lists of its own, e.g. peri, cannot be split). Collective
     bool pair_stays_in_lists();
+    // true if each pair style puts the forces of a pair on its two atoms
+    // only: evaluated with its list cut to one pair (the closest of each
+    // pair of atom types), it must give no force on other atoms (a hydrogen bond style acts on the hydrogen,
+    // TIP4P styles on the atoms of both molecules). Collective
+    bool pair_forces_stay_on_pairs();
 
     // fraction of all interactions that a subset holds (global)
     double fraction(Subset which) const { return frac[which]; }
