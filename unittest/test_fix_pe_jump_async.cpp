@@ -33,38 +33,41 @@ constexpr double OMEGA2 = 10.0;
 const std::vector<double> Q0 = {0.1, -0.05, 0.02, 0.3, -0.2, 0.1};
 const std::vector<double> P0 = {0.5, 0.0, 0.0, 0.0, 1.0, 0.0};
 
-void chain(Sim &s) { slow_fast_chain(s, M, OMEGA2, Q0, P0); }
+void chain(Sim &s)
+{
+  slow_fast_chain(s, M, OMEGA2, Q0, P0);
+}
 
 // positions q_1..q_2m of the chain (x minus the lattice site)
-std::vector<double> chain_q(Sim &s) {
+std::vector<double> chain_q(Sim &s)
+{
   std::vector<double> q;
-  for (int id = 2; id <= 2 * M + 1; ++id)
-    q.push_back(s.x(id, 0) - (id - 1) * FPU_SPACING);
+  for (int id = 2; id <= 2 * M + 1; ++id) q.push_back(s.x(id, 0) - (id - 1) * FPU_SPACING);
   return q;
 }
 
 // chain at time T with fix pe_jump/async (K >= 1) or fix pe_jump (K = 0)
-std::vector<double> chain_at(double T, double hf, int K,
-                             const std::string &rule) {
+std::vector<double> chain_at(double T, double hf, int K, const std::string &rule)
+{
   Sim s;
   chain(s);
-  const std::string fix =
-      K ? fmt::format("fix 1 chain pe_jump/async {} fast quadrature {}", K,
-                      rule)
-        : "fix 1 chain pe_jump quadrature " + rule;
+  const std::string fix = K
+      ? fmt::format("fix 1 chain pe_jump/async {} fast quadrature {}", K, rule)
+      : "fix 1 chain pe_jump quadrature " + rule;
   const int nsteps = static_cast<int>(std::lround(T / hf));
   s.cmds({fix, fmt::format("timestep {:.17g}", hf), "thermo 0",
           fmt::format("run {} post no", nsteps)});
   return chain_q(s);
 }
 
-std::vector<double> chain_q_at_start() {
+std::vector<double> chain_q_at_start()
+{
   Sim s;
   chain(s);
   return chain_q(s);
 }
 
-} // namespace
+}    // namespace
 
 /* ----------------------------------------------------------------------
    hybrid styles are split like plain ones: the paper's slow/fast chain
@@ -72,7 +75,8 @@ std::vector<double> chain_q_at_start() {
    pair_style hybrid equals the chain with one bond style
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, HybridStylesEqualOneStyle) {
+TEST(PEJumpAsync, HybridStylesEqualOneStyle)
+{
   for (const std::string rule : {"midpoint", "lobatto 3"}) {
     std::vector<double> one, hybrid;
     for (const bool use_hybrid : {false, true}) {
@@ -81,15 +85,14 @@ TEST(PEJumpAsync, HybridStylesEqualOneStyle) {
       if (use_hybrid)
         s.cmds({"bond_style hybrid harmonic class2",
                 fmt::format("bond_coeff 1 harmonic {:.17g} 1.5", 0.25 * OMEGA2),
-                "bond_coeff 2 class2 1.5 0.0 0.0 1.0",
-                "pair_style hybrid zero 1.0", "pair_coeff * * zero"});
-      s.cmds({"fix 1 chain pe_jump/async 10 fast quadrature " + rule,
-              "timestep 2e-3", "thermo 0", "run 1000 post no"});
+                "bond_coeff 2 class2 1.5 0.0 0.0 1.0", "pair_style hybrid zero 1.0",
+                "pair_coeff * * zero"});
+      s.cmds({"fix 1 chain pe_jump/async 10 fast quadrature " + rule, "timestep 2e-3", "thermo 0",
+              "run 1000 post no"});
       (use_hybrid ? hybrid : one) = chain_q(s);
     }
     EXPECT_LT(max_diff(one, hybrid), 1e-13) << rule;
-    EXPECT_GT(max_diff(one, chain_q_at_start()), 1e-2)
-        << rule; // the chain moved
+    EXPECT_GT(max_diff(one, chain_q_at_start()), 1e-2) << rule;    // the chain moved
   }
 }
 
@@ -97,18 +100,17 @@ TEST(PEJumpAsync, HybridStylesEqualOneStyle) {
    classes on the paper's chain: q_1, q_2 fast, q_3 mixed, q_4..q_6 slow
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, ClassifiesSlowMixedFast) {
+TEST(PEJumpAsync, ClassifiesSlowMixedFast)
+{
   Sim s;
   chain(s);
-  s.cmds({"fix 1 chain pe_jump/async 10 fast", "timestep 1e-3", "thermo 0",
-          "run 0 post no"});
-  EXPECT_EQ(s.vec("1", 6), 3.0); // slow
-  EXPECT_EQ(s.vec("1", 7), 1.0); // mixed
-  EXPECT_EQ(s.vec("1", 8), 2.0); // fast
+  s.cmds({"fix 1 chain pe_jump/async 10 fast", "timestep 1e-3", "thermo 0", "run 0 post no"});
+  EXPECT_EQ(s.vec("1", 6), 3.0);    // slow
+  EXPECT_EQ(s.vec("1", 7), 1.0);    // mixed
+  EXPECT_EQ(s.vec("1", 8), 2.0);    // fast
   const double *klass = s.lmp->modify->get_fix_by_id("1")->vector_atom;
   const double expected[8] = {-1, 2, 2, 1, 0, 0, 0, -1};
-  for (int id = 1; id <= 8; ++id)
-    EXPECT_EQ(klass[s.lmp->atom->map(id)], expected[id - 1]) << id;
+  for (int id = 1; id <= 8; ++id) EXPECT_EQ(klass[s.lmp->atom->map(id)], expected[id - 1]) << id;
   // coarse-node flag: 1 at coarse nodes only
   s.cmd("run 3 post no");
   EXPECT_EQ(s.vec("1", 5), 0.0);
@@ -120,9 +122,9 @@ TEST(PEJumpAsync, ClassifiesSlowMixedFast) {
    K = 1: every step is a coarse step, the scheme is fix pe_jump
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, OneFineStepPerCoarseStepIsTheSynchronousScheme) {
-  for (const std::string rule :
-       {"midpoint", "lobatto 3", "legendre 2", "lobatto 5"}) {
+TEST(PEJumpAsync, OneFineStepPerCoarseStepIsTheSynchronousScheme)
+{
+  for (const std::string rule : {"midpoint", "lobatto 3", "legendre 2", "lobatto 5"}) {
     const auto sync = chain_at(5.0, 1e-3, 0, rule);
     const auto async = chain_at(5.0, 1e-3, 1, rule);
     EXPECT_LT(max_diff(sync, async), 1e-13) << rule;
@@ -132,8 +134,7 @@ TEST(PEJumpAsync, OneFineStepPerCoarseStepIsTheSynchronousScheme) {
   for (int k = 0; k < 2; ++k) {
     Sim s;
     lj_liquid(s);
-    s.cmds({"region slab block 0 2 INF INF INF INF units lattice",
-            "group fast region slab",
+    s.cmds({"region slab block 0 2 INF INF INF INF units lattice", "group fast region slab",
             k ? "fix 1 all pe_jump/async 1 fast quadrature lobatto 3"
               : "fix 1 all pe_jump quadrature lobatto 3",
             "timestep 0.005", "thermo 0", "run 100 post no"});
@@ -148,16 +149,15 @@ TEST(PEJumpAsync, OneFineStepPerCoarseStepIsTheSynchronousScheme) {
    K = 5) the run equals one that rebuilds the lists before every step
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, ListsHoldEveryPairAtEveryNode) {
+TEST(PEJumpAsync, ListsHoldEveryPairAtEveryNode)
+{
   const auto run = [](const std::string &rule, const std::string &lists) {
     Sim s;
     lj_liquid(s, 3);
-    s.cmds({"velocity all scale 0.5", "neighbor 0.15 bin",
-            "neigh_modify " + lists,
-            "region slab block 0 1 INF INF INF INF units lattice",
-            "group fast region slab",
-            "fix 1 all pe_jump/async 5 fast quadrature " + rule,
-            "timestep 0.005", "thermo 0", "run 300"});
+    s.cmds({"velocity all scale 0.5", "neighbor 0.15 bin", "neigh_modify " + lists,
+            "region slab block 0 1 INF INF INF INF units lattice", "group fast region slab",
+            "fix 1 all pe_jump/async 5 fast quadrature " + rule, "timestep 0.005", "thermo 0",
+            "run 300"});
     return std::make_pair(unwrapped_positions(s), s.lmp->neighbor->ncalls);
   };
   for (const std::string rule : {"midpoint", "lobatto 3", "legendre 2"}) {
@@ -167,8 +167,8 @@ TEST(PEJumpAsync, ListsHoldEveryPairAtEveryNode) {
     for (const std::string every : {"1", "20"}) {
       const auto checked = run(rule, "every " + every + " delay 0 check yes");
       const std::string what = rule + ", every " + every;
-      EXPECT_GT(checked.second, 20) << what;            // the checks rebuild
-      EXPECT_LT(checked.second, always.second) << what; // but not every step
+      EXPECT_GT(checked.second, 20) << what;               // the checks rebuild
+      EXPECT_LT(checked.second, always.second) << what;    // but not every step
       EXPECT_LT(max_diff(checked.first, always.first), 1e-9) << what;
     }
   }
@@ -181,7 +181,8 @@ TEST(PEJumpAsync, ListsHoldEveryPairAtEveryNode) {
 
 namespace {
 // max relative deviation of pe + f_1 at coarse nodes over ncoarse coarse steps
-double coarse_node_drift(Sim &s, int K, int ncoarse) {
+double coarse_node_drift(Sim &s, int K, int ncoarse)
+{
   s.cmds({"thermo 0", "run 0 post no"});
   const double h0 = s.eval("c_thermo_pe+f_1");
   double worst = 0.0;
@@ -192,14 +193,14 @@ double coarse_node_drift(Sim &s, int K, int ncoarse) {
   }
   return worst / std::fabs(h0);
 }
-} // namespace
+}    // namespace
 
-TEST(PEJumpAsync, PseudoEnergyConservedAtCoarseNodes) {
+TEST(PEJumpAsync, PseudoEnergyConservedAtCoarseNodes)
+{
   {
     Sim s;
     chain(s);
-    s.cmds({"fix 1 chain pe_jump/async 50 fast quadrature lobatto 3",
-            "timestep 2e-4"});
+    s.cmds({"fix 1 chain pe_jump/async 50 fast quadrature lobatto 3", "timestep 2e-4"});
     const double drift = coarse_node_drift(s, 50, 1000);
     std::cout << "slow/fast quartic chain, lobatto 3, K=50: " << drift << "\n";
     // 50000 fine steps, coordinates of order 10, energy 0.08: round-off of
@@ -212,8 +213,7 @@ TEST(PEJumpAsync, PseudoEnergyConservedAtCoarseNodes) {
     Sim s;
     harmonic_ring(s, 20, 10.0, 1.0, 7);
     s.cmds({"bond_coeff 1 10.0 1.0", "group fast id 1:10",
-            "fix 1 all pe_jump/async 7 fast quadrature midpoint",
-            "timestep 0.01"});
+            "fix 1 all pe_jump/async 7 fast quadrature midpoint", "timestep 0.01"});
     const double drift = coarse_node_drift(s, 7, 1000);
     std::cout << "harmonic ring, midpoint, K=7: " << drift << "\n";
     EXPECT_LT(drift, 3e-12);
@@ -223,8 +223,7 @@ TEST(PEJumpAsync, PseudoEnergyConservedAtCoarseNodes) {
     // varies, which shows that the test above can fail
     Sim s;
     chain(s);
-    s.cmds({"fix 1 chain pe_jump/async 50 fast quadrature midpoint",
-            "timestep 2e-4"});
+    s.cmds({"fix 1 chain pe_jump/async 50 fast quadrature midpoint", "timestep 2e-4"});
     EXPECT_GT(coarse_node_drift(s, 50, 200), 1e-9);
   }
 }
@@ -236,7 +235,8 @@ TEST(PEJumpAsync, PseudoEnergyConservedAtCoarseNodes) {
 ------------------------------------------------------------------------- */
 
 namespace {
-double order(const std::vector<double> &h, const std::vector<double> &err) {
+double order(const std::vector<double> &h, const std::vector<double> &err)
+{
   // least-squares slope of log(err) against log(h)
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   const double n = h.size();
@@ -249,9 +249,10 @@ double order(const std::vector<double> &h, const std::vector<double> &err) {
   }
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
-} // namespace
+}    // namespace
 
-TEST(PEJumpAsync, SecondOrderInCoarseStepAndAtFixedRatio) {
+TEST(PEJumpAsync, SecondOrderInCoarseStepAndAtFixedRatio)
+{
   const double T = 2.0, hf = 1e-4;
   const auto ref = chain_at(T, hf, 0, "lobatto 5");
   std::vector<double> hs, err;
@@ -261,8 +262,7 @@ TEST(PEJumpAsync, SecondOrderInCoarseStepAndAtFixedRatio) {
   }
   const double p1 = order(hs, err);
   std::cout << "errors in h_S at h_F = 1e-4:";
-  for (double e : err)
-    std::cout << " " << e;
+  for (double e : err) std::cout << " " << e;
   std::cout << "\norder in h_S at h_F = 1e-4: " << p1 << "\n";
   EXPECT_NEAR(p1, 2.0, 0.1);
 
@@ -279,8 +279,7 @@ TEST(PEJumpAsync, SecondOrderInCoarseStepAndAtFixedRatio) {
   // a buffer layer changes the partition, not the order
   std::vector<double> err3;
   for (double h : hs2)
-    err3.push_back(
-        max_diff(exact, chain_at(T, h / 25, 25, "lobatto 5 buffer 1")));
+    err3.push_back(max_diff(exact, chain_at(T, h / 25, 25, "lobatto 5 buffer 1")));
   const double p3 = order(hs2, err3);
   std::cout << "order at h_S/h_F = 25 with buffer 1: " << p3 << "\n";
   EXPECT_NEAR(p3, 2.0, 0.1);
@@ -293,36 +292,40 @@ TEST(PEJumpAsync, SecondOrderInCoarseStepAndAtFixedRatio) {
 
 namespace {
 class BondCounting : public LAMMPS_NS::BondClass2 {
-public:
+ public:
   using BondClass2::BondClass2;
   static double computed;
-  void compute(int eflag, int vflag) override {
+  void compute(int eflag, int vflag) override
+  {
     computed += neighbor->nbondlist;
     BondClass2::compute(eflag, vflag);
   }
 };
 double BondCounting::computed = 0.0;
-LAMMPS_NS::Bond *bond_counting_creator(LAMMPS_NS::LAMMPS *lmp) {
+LAMMPS_NS::Bond *bond_counting_creator(LAMMPS_NS::LAMMPS *lmp)
+{
   return new BondCounting(lmp);
 }
 
 class PairCounting : public LAMMPS_NS::PairLJCut {
-public:
+ public:
   using PairLJCut::PairLJCut;
   static double computed;
-  void compute(int eflag, int vflag) override {
-    for (int ii = 0; ii < list->inum; ++ii)
-      computed += list->numneigh[list->ilist[ii]];
+  void compute(int eflag, int vflag) override
+  {
+    for (int ii = 0; ii < list->inum; ++ii) computed += list->numneigh[list->ilist[ii]];
     PairLJCut::compute(eflag, vflag);
   }
 };
 double PairCounting::computed = 0.0;
-LAMMPS_NS::Pair *pair_counting_creator(LAMMPS_NS::LAMMPS *lmp) {
+LAMMPS_NS::Pair *pair_counting_creator(LAMMPS_NS::LAMMPS *lmp)
+{
   return new PairCounting(lmp);
 }
-} // namespace
+}    // namespace
 
-TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone) {
+TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone)
+{
   // T = 1, h_S = 0.01, h_F = 2e-4, lobatto 5 (4 evaluations per step)
   const double T = 1.0, hs = 0.01, hf = 2e-4;
   const int n = 5, nsteps = 5000;
@@ -358,12 +361,9 @@ TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone) {
   lj_liquid(s);
   // a cold crystal keeps its pair count, so that the count is exact
   s.cmds({"velocity all scale 0.001", "pair_style lj/cut/counting 2.5",
-          "pair_coeff 1 1 1.0 1.0 2.5",
-          "region slab block 0 1 INF INF INF INF units lattice",
-          "group fast region slab",
-          "fix 1 all pe_jump/async 5 fast quadrature midpoint",
-          "timestep 0.005", "thermo 0", "neigh_modify every 1 delay 0 check no",
-          "run 0 post no"});
+          "pair_coeff 1 1 1.0 1.0 2.5", "region slab block 0 1 INF INF INF INF units lattice",
+          "group fast region slab", "fix 1 all pe_jump/async 5 fast quadrature midpoint",
+          "timestep 0.005", "thermo 0", "neigh_modify every 1 delay 0 check no", "run 0 post no"});
   // fine fraction: pairs of the (full) list that involve a fast atom
   auto *list = s.lmp->force->pair->list;
   const int *mask = s.lmp->atom->mask;
@@ -374,8 +374,7 @@ TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone) {
     for (int jj = 0; jj < list->numneigh[i]; ++jj) {
       const int j = list->firstneigh[i][jj] & NEIGHMASK;
       all += 1.0;
-      if ((mask[i] | mask[j]) & fastbit)
-        fine += 1.0;
+      if ((mask[i] | mask[j]) & fastbit) fine += 1.0;
     }
   }
   EXPECT_GT(fine / all, 0.2);
@@ -389,18 +388,17 @@ TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone) {
   const double expected = 100 * (fine / all) + 20 * (1.0 - fine / all) + 1.0;
   EXPECT_NEAR(reported, expected, 1e-9 * expected);
   EXPECT_NEAR(reported, PairCounting::computed / all, 1e-9 * expected);
-  EXPECT_LT(reported, 0.7 * 101); // fix pe_jump: 101
+  EXPECT_LT(reported, 0.7 * 101);    // fix pe_jump: 101
 }
 
 /* ----------------------------------------------------------------------
    split runs and restarts at any step, including inside a coarse step
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact) {
-  for (const std::string rule :
-       {"midpoint", "lobatto 3", "lobatto 3 buffer 1"}) {
-    const std::string fix =
-        "fix 1 chain pe_jump/async 20 fast quadrature " + rule;
+TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact)
+{
+  for (const std::string rule : {"midpoint", "lobatto 3", "lobatto 3 buffer 1"}) {
+    const std::string fix = "fix 1 chain pe_jump/async 20 fast quadrature " + rule;
     std::vector<double> unbroken, split, restarted;
     {
       Sim s;
@@ -411,18 +409,16 @@ TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact) {
     {
       Sim s;
       chain(s);
-      s.cmds({fix, "timestep 5e-4", "thermo 0", "run 333 post no",
-              "run 667 post no"});
+      s.cmds({fix, "timestep 5e-4", "thermo 0", "run 333 post no", "run 667 post no"});
       split = chain_q(s);
     }
     {
       Sim s;
       chain(s);
       s.cmds({fix, "timestep 5e-4", "thermo 0", "run 333 post no"});
-      EXPECT_EQ(s.vec("1", 5), 0.0); // inside a coarse step
-      s.cmds({"write_restart pe_jump_async.restart", "clear",
-              "read_restart pe_jump_async.restart", "comm_modify cutoff 4.0",
-              fix, "thermo 0", "run 667 post no"});
+      EXPECT_EQ(s.vec("1", 5), 0.0);    // inside a coarse step
+      s.cmds({"write_restart pe_jump_async.restart", "clear", "read_restart pe_jump_async.restart",
+              "comm_modify cutoff 4.0", fix, "thermo 0", "run 667 post no"});
       restarted = chain_q(s);
       std::remove("pe_jump_async.restart");
     }
@@ -436,45 +432,40 @@ TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact) {
    bad input
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, BadInputGivesClearErrors) {
-  const std::vector<std::string> base = {
-      "units lj",
-      "atom_style bond",
-      "region box block 0 10 0 10 0 10",
-      "create_box 2 box bond/types 1 extra/bond/per/atom 2",
-      "create_atoms 1 single 1 1 1",
-      "create_atoms 1 single 2 1 1",
-      "create_atoms 2 single 5 5 5",
-      "mass * 1.0",
-      "pair_style lj/cut 2.5",
-      "pair_coeff * * 1.0 1.0",
-      "group fast type 1",
-      "group empty type 3",
-      "group one id 1"};
-  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 0 fast"),
-              ContainsRegex("K >= 1"));
+TEST(PEJumpAsync, BadInputGivesClearErrors)
+{
+  const std::vector<std::string> base = {"units lj",
+                                         "atom_style bond",
+                                         "region box block 0 10 0 10 0 10",
+                                         "create_box 2 box bond/types 1 extra/bond/per/atom 2",
+                                         "create_atoms 1 single 1 1 1",
+                                         "create_atoms 1 single 2 1 1",
+                                         "create_atoms 2 single 5 5 5",
+                                         "mass * 1.0",
+                                         "pair_style lj/cut 2.5",
+                                         "pair_coeff * * 1.0 1.0",
+                                         "group fast type 1",
+                                         "group empty type 3",
+                                         "group one id 1"};
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 0 fast"), ContainsRegex("K >= 1"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast buffer -1"),
               ContainsRegex("buffer needs N >= 0"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump buffer 1"),
               ContainsRegex("buffer keyword belongs to fix pe_jump/async"));
-  EXPECT_THAT(
-      error_of(base, "fix 1 all pe_jump/async 5"),
-      ContainsRegex("Illegal fix pe_jump/async command: missing argument"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5"),
+              ContainsRegex("Illegal fix pe_jump/async command: missing argument"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 nosuchgroup"),
               ContainsRegex("fast group nosuchgroup does not exist"));
-  EXPECT_THAT(
-      error_of(base, "fix 1 all pe_jump/async 5 fast adapt 1e-3 1e-4 1e-2"),
-      ContainsRegex("does not support the adapt keyword"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast adapt 1e-3 1e-4 1e-2"),
+              ContainsRegex("does not support the adapt keyword"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast sample pair"),
               ContainsRegex("remove the sample keyword"));
   EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast compensate yes"),
               ContainsRegex("does not support compensate yes"));
-  EXPECT_THAT(
-      error_of(base, "fix 1 all pe_jump/async 5 fast quadrature auto 1e-6"),
-      ContainsRegex("does not support quadrature auto"));
-  EXPECT_THAT(
-      error_of(base, "fix 1 all pe_jump/async 5 fast quadrature lobatto 7"),
-      ContainsRegex("lobatto needs 2 to 5 points"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast quadrature auto 1e-6"),
+              ContainsRegex("does not support quadrature auto"));
+  EXPECT_THAT(error_of(base, "fix 1 all pe_jump/async 5 fast quadrature lobatto 7"),
+              ContainsRegex("lobatto needs 2 to 5 points"));
   auto with = [&](std::vector<std::string> extra) {
     auto all = base;
     all.insert(all.end(), extra.begin(), extra.end());
@@ -482,23 +473,15 @@ TEST(PEJumpAsync, BadInputGivesClearErrors) {
   };
   EXPECT_THAT(error_of(with({"fix 1 all pe_jump/async 5 empty"}), "run 1"),
               ContainsRegex("the fast group has no atoms in the fix group"));
+  EXPECT_THAT(error_of(with({"fix 1 one pe_jump/async 5 fast"}), "run 1"),
+              ContainsRegex("1 atoms of the fast group are not in the fix group"));
   EXPECT_THAT(
-      error_of(with({"fix 1 one pe_jump/async 5 fast"}), "run 1"),
-      ContainsRegex("1 atoms of the fast group are not in the fix group"));
+      error_of(with({"group two id 2", "fix 1 one pe_jump/async 5 one", "fix 2 two nve"}), "run 1"),
+      ContainsRegex("must be the only time integration fix \\(found fix 2 nve\\)"));
+  EXPECT_THAT(error_of(with({"fix 1 all pe_jump/async 5 fast", "run_style respa 2 2"}), "run 1"),
+              ContainsRegex("does not support run_style respa"));
   EXPECT_THAT(
-      error_of(with({"group two id 2", "fix 1 one pe_jump/async 5 one",
-                     "fix 2 two nve"}),
-               "run 1"),
-      ContainsRegex(
-          "must be the only time integration fix \\(found fix 2 nve\\)"));
-  EXPECT_THAT(
-      error_of(with({"fix 1 all pe_jump/async 5 fast", "run_style respa 2 2"}),
-               "run 1"),
-      ContainsRegex("does not support run_style respa"));
-  EXPECT_THAT(
-      error_of(
-          with({"fix 1 all pe_jump/async 5 fast", "fix 2 all addforce 1 0 0"}),
-          "run 1"),
+      error_of(with({"fix 1 all pe_jump/async 5 fast", "fix 2 all addforce 1 0 0"}), "run 1"),
       ContainsRegex("cannot yet be combined with fix 2 \\(addforce\\)"));
   const std::string sw = std::string(PEJUMP_LAMMPS_POTENTIALS) + "/Si.sw";
   const std::vector<std::string> silicon = {"units metal",
@@ -527,8 +510,7 @@ TEST(PEJumpAsync, BadInputGivesClearErrors) {
                                             "kspace_style ewald 1e-4",
                                             "group fast type 1",
                                             "fix 1 all pe_jump/async 5 fast"};
-  EXPECT_THAT(error_of(charged, "run 1"),
-              ContainsRegex("cannot split k-space \\(ewald\\)"));
+  EXPECT_THAT(error_of(charged, "run 1"), ContainsRegex("cannot split k-space \\(ewald\\)"));
 }
 
 /* ----------------------------------------------------------------------
@@ -536,25 +518,26 @@ TEST(PEJumpAsync, BadInputGivesClearErrors) {
    the instability error before non-finite numbers appear; below it, runs
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected) {
+TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected)
+{
   // ring of 20, E = 10 (r-1)^2: omega_max = 2 sqrt(20), CFL h < 0.2236
   auto ring = [](Sim &s, int K) {
     harmonic_ring(s, 20, 10.0, 1.0, 7);
     // slow atoms move up to ~0.15 per coarse step: the skin must cover it
     s.cmds({"neighbor 1.0 bin", "group fast id 1:10",
-            fmt::format("fix 1 all pe_jump/async {} fast", K), "timestep 0.01",
-            "thermo 100", "thermo_style custom step pe f_1[1] f_1[2]"});
+            fmt::format("fix 1 all pe_jump/async {} fast", K), "timestep 0.01", "thermo 100",
+            "thermo_style custom step pe f_1[1] f_1[2]"});
   };
   {
     Sim s;
-    ring(s, 15); // h_S = 0.15
+    ring(s, 15);    // h_S = 0.15
     s.cmd("run 20000 post no");
     EXPECT_TRUE(std::isfinite(s.vec("1", 1)));
-    EXPECT_LT(s.vec("1", 1), 1.0); // jump energy stays small
+    EXPECT_LT(s.vec("1", 1), 1.0);    // jump energy stays small
   }
   {
     Sim s(MPI_COMM_WORLD, false);
-    ring(s, 30); // h_S = 0.3
+    ring(s, 30);    // h_S = 0.3
     ::testing::internal::CaptureStdout();
     std::string what;
     try {
@@ -573,22 +556,22 @@ TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected) {
    buffer N: N layers of slow partners join the fine clock
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, BufferLayersJoinTheFineClock) {
+TEST(PEJumpAsync, BufferLayersJoinTheFineClock)
+{
   for (int layers : {1, 2}) {
     Sim s;
     chain(s);
-    s.cmds({fmt::format("fix 1 chain pe_jump/async 10 fast buffer {}", layers),
-            "timestep 1e-3", "thermo 0", "run 0 post no"});
+    s.cmds({fmt::format("fix 1 chain pe_jump/async 10 fast buffer {}", layers), "timestep 1e-3",
+            "thermo 0", "run 0 post no"});
     // q_1..q_3 were fast (q_3 mixed), q_4..q_6 slow: each layer moves the
     // interface one atom on
-    EXPECT_EQ(s.vec("1", 6), 3.0 - layers); // slow
-    EXPECT_EQ(s.vec("1", 7), 1.0);          // mixed
-    EXPECT_EQ(s.vec("1", 8), 2.0 + layers); // fast
+    EXPECT_EQ(s.vec("1", 6), 3.0 - layers);    // slow
+    EXPECT_EQ(s.vec("1", 7), 1.0);             // mixed
+    EXPECT_EQ(s.vec("1", 8), 2.0 + layers);    // fast
     const double *klass = s.lmp->modify->get_fix_by_id("1")->vector_atom;
     for (int id = 2; id <= 7; ++id) {
-      const int q = id - 1; // chain coordinate q_1..q_6
-      const double expected =
-          (q < 3 + layers) ? 2 : ((q == 3 + layers) ? 1 : 0);
+      const int q = id - 1;    // chain coordinate q_1..q_6
+      const double expected = (q < 3 + layers) ? 2 : ((q == 3 + layers) ? 1 : 0);
       EXPECT_EQ(klass[s.lmp->atom->map(id)], expected) << layers << " " << id;
     }
     EXPECT_GE(s.lmp->group->find("1_fine_clock"), 0);
@@ -601,13 +584,13 @@ TEST(PEJumpAsync, BufferLayersJoinTheFineClock) {
    with one buffer layer it is stable and keeps the pseudo-energy
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, BufferRemovesTheInterfaceResonanceOfTheWave) {
+TEST(PEJumpAsync, BufferRemovesTheInterfaceResonanceOfTheWave)
+{
   constexpr int N = 250;
   auto wave = [](Sim &s, const std::string &extra) {
     inhomogeneous_wave(s, N);
     s.cmds({"compute epot all pe", "fix 1 chain pe_jump/async 10 fast" + extra,
-            fmt::format("timestep {:.17g}", 0.1 / N),
-            "variable Ht equal c_epot+f_1",
+            fmt::format("timestep {:.17g}", 0.1 / N), "variable Ht equal c_epot+f_1",
             "thermo_style custom step c_epot f_1 f_1[2] v_Ht", "thermo 10"});
   };
   {
@@ -628,16 +611,14 @@ TEST(PEJumpAsync, BufferRemovesTheInterfaceResonanceOfTheWave) {
     const double ht0 = s.eval("v_Ht");
     double jfirst = 0.0, jlast = 0.0, dht = 0.0;
     for (int block = 0; block < 20; ++block) {
-      s.cmd("run 1000 post no"); // coarse nodes: multiples of K
+      s.cmd("run 1000 post no");    // coarse nodes: multiples of K
       const double j = s.vec("1", 1);
-      if (block < 2)
-        jfirst = std::max(jfirst, j);
-      if (block >= 18)
-        jlast = std::max(jlast, j);
+      if (block < 2) jfirst = std::max(jfirst, j);
+      if (block >= 18) jlast = std::max(jlast, j);
       dht = std::max(dht, std::fabs(s.eval("v_Ht") - ht0) / std::fabs(ht0));
     }
     EXPECT_GT(jfirst, 0.0);
-    EXPECT_LT(jlast, 2.0 * jfirst); // no growth over 2000 coarse steps
+    EXPECT_LT(jlast, 2.0 * jfirst);    // no growth over 2000 coarse steps
     EXPECT_LT(dht, 1e-8);
   }
 }
@@ -648,18 +629,16 @@ TEST(PEJumpAsync, BufferRemovesTheInterfaceResonanceOfTheWave) {
    scheme restarts and says so
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, VelocityReversalAtCoarseNodesOnly) {
-  for (const int nsteps :
-       {340, 333}) { // K = 20: a coarse node, and inside a coarse step
+TEST(PEJumpAsync, VelocityReversalAtCoarseNodesOnly)
+{
+  for (const int nsteps : {340, 333}) {    // K = 20: a coarse node, and inside a coarse step
     Sim s(MPI_COMM_WORLD, false);
     ::testing::internal::CaptureStdout();
     chain(s);
-    s.cmds({"fix 1 chain pe_jump/async 20 fast quadrature lobatto 3",
-            "timestep 5e-4", "thermo 0",
+    s.cmds({"fix 1 chain pe_jump/async 20 fast quadrature lobatto 3", "timestep 5e-4", "thermo 0",
             fmt::format("run {} post no", nsteps)});
     for (int i = 0; i < s.lmp->atom->nlocal; ++i)
-      for (int k = 0; k < 3; ++k)
-        s.lmp->atom->v[i][k] = -s.lmp->atom->v[i][k];
+      for (int k = 0; k < 3; ++k) s.lmp->atom->v[i][k] = -s.lmp->atom->v[i][k];
     s.cmd(fmt::format("run {} post no", nsteps));
     const std::string out = ::testing::internal::GetCapturedStdout();
     const double back = max_diff(chain_q(s), Q0);
@@ -667,9 +646,8 @@ TEST(PEJumpAsync, VelocityReversalAtCoarseNodesOnly) {
       EXPECT_THAT(out, ContainsRegex("all velocities were reversed"));
       EXPECT_LT(back, 1e-11);
     } else {
-      EXPECT_THAT(out,
-                  ContainsRegex("velocities were changed since the last run"));
-      EXPECT_GT(back, 1e-8); // a new start: no exact return
+      EXPECT_THAT(out, ContainsRegex("velocities were changed since the last run"));
+      EXPECT_GT(back, 1e-8);    // a new start: no exact return
     }
   }
 }
@@ -684,20 +662,22 @@ TEST(PEJumpAsync, VelocityReversalAtCoarseNodesOnly) {
 namespace {
 // lj/cut plus a force on the first owned atom that is in no neighbor list
 class PairOffList : public LAMMPS_NS::PairLJCut {
-public:
+ public:
   using PairLJCut::PairLJCut;
-  void compute(int eflag, int vflag) override {
+  void compute(int eflag, int vflag) override
+  {
     PairLJCut::compute(eflag, vflag);
-    if (atom->nlocal)
-      atom->f[0][0] += 1.0;
+    if (atom->nlocal) atom->f[0][0] += 1.0;
   }
 };
-LAMMPS_NS::Pair *pair_offlist_creator(LAMMPS_NS::LAMMPS *lmp) {
+LAMMPS_NS::Pair *pair_offlist_creator(LAMMPS_NS::LAMMPS *lmp)
+{
   return new PairOffList(lmp);
 }
-} // namespace
+}    // namespace
 
-TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused) {
+TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused)
+{
   {
     Sim s;
     (*s.lmp->force->pair_map)["lj/cut/offlist"] = &pair_offlist_creator;
@@ -705,54 +685,44 @@ TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused) {
     s.cmds({"pair_style lj/cut/offlist 2.5", "pair_coeff 1 1 1.0 1.0 2.5",
             "region f block 0 1 INF INF INF INF", "group fast region f",
             "fix 1 all pe_jump/async 5 fast"});
-    EXPECT_THAT(error_of({}, ""),
-                ContainsRegex("no error")); // the helper itself
+    EXPECT_THAT(error_of({}, ""), ContainsRegex("no error"));    // the helper itself
     try {
       s.cmd("run 1");
-      ADD_FAILURE()
-          << "a pair style with forces outside its lists was not refused";
+      ADD_FAILURE() << "a pair style with forces outside its lists was not refused";
     } catch (LAMMPS_NS::LAMMPSException &e) {
-      EXPECT_THAT(
-          e.what(),
-          ContainsRegex("computes forces that are not in its neighbor lists"));
+      EXPECT_THAT(e.what(), ContainsRegex("computes forces that are not in its neighbor lists"));
     }
   }
-  const std::vector<std::string> chain_box = {
-      "units lj",
-      "atom_style bond",
-      "region box block 0 10 0 10 0 10",
-      "create_box 1 box bond/types 1 extra/bond/per/atom 2",
-      "create_atoms 1 single 1 1 1",
-      "create_atoms 1 single 2 1 1",
-      "create_atoms 1 single 3 1 1",
-      "mass * 1.0",
-      "pair_style zero 2.5",
-      "pair_coeff * *",
-      "create_bonds single/bond 1 1 2",
-      "create_bonds single/bond 1 2 3",
-      "group fast id 1"};
+  const std::vector<std::string> chain_box = {"units lj",
+                                              "atom_style bond",
+                                              "region box block 0 10 0 10 0 10",
+                                              "create_box 1 box bond/types 1 extra/bond/per/atom 2",
+                                              "create_atoms 1 single 1 1 1",
+                                              "create_atoms 1 single 2 1 1",
+                                              "create_atoms 1 single 3 1 1",
+                                              "mass * 1.0",
+                                              "pair_style zero 2.5",
+                                              "pair_coeff * *",
+                                              "create_bonds single/bond 1 1 2",
+                                              "create_bonds single/bond 1 2 3",
+                                              "group fast id 1"};
   auto with = [&](std::vector<std::string> extra) {
     auto all = chain_box;
     all.insert(all.end(), extra.begin(), extra.end());
     return all;
   };
+  EXPECT_THAT(error_of(with({"bond_style quartic", "bond_coeff 1 1200 -0.55 0.25 1.3 34.6878",
+                             "special_bonds lj 1 1 1", "pair_style lj/cut 1.12",
+                             "pair_coeff * * 1.0 1.0", "fix 1 all pe_jump/async 5 fast"}),
+                       "run 1"),
+              ContainsRegex("cannot split bond style quartic: its bonds can break"));
   EXPECT_THAT(
-      error_of(
-          with({"bond_style quartic",
-                "bond_coeff 1 1200 -0.55 0.25 1.3 34.6878",
-                "special_bonds lj 1 1 1", "pair_style lj/cut 1.12",
-                "pair_coeff * * 1.0 1.0", "fix 1 all pe_jump/async 5 fast"}),
-          "run 1"),
-      ContainsRegex("cannot split bond style quartic: its bonds can break"));
-  EXPECT_THAT(
-      error_of({"units si", "atom_style peri", "atom_modify map array",
-                "lattice sc 0.0005", "region target block 0 4 0 4 0 4",
-                "create_box 1 target", "create_atoms 1 region target",
-                "pair_style peri/pmb",
-                "pair_coeff * * 1.6863e22 0.0015001 0.0005 0.25",
-                "set group all density 2200", "set group all volume 1.25e-10",
-                "region f block 0 1 INF INF INF INF", "group fast region f",
-                "fix 1 all pe_jump/async 5 fast", "timestep 1e-7"},
+      error_of({"units si", "atom_style peri", "atom_modify map array", "lattice sc 0.0005",
+                "region target block 0 4 0 4 0 4", "create_box 1 target",
+                "create_atoms 1 region target", "pair_style peri/pmb",
+                "pair_coeff * * 1.6863e22 0.0015001 0.0005 0.25", "set group all density 2200",
+                "set group all volume 1.25e-10", "region f block 0 1 INF INF INF INF",
+                "group fast region f", "fix 1 all pe_jump/async 5 fast", "timestep 1e-7"},
                "run 1"),
       ContainsRegex("cannot split peridynamic interactions"));
   // bonds deleted between runs are split anew at the next run
@@ -768,26 +738,24 @@ TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused) {
    takes them as impulses); output fixes at the end of a step are fine
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused) {
+TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused)
+{
   const auto run_with = [](const std::string &other) {
     Sim s;
     lj_liquid(s, 3);
     s.cmds({"region f block 0 1 INF INF INF INF", "group fast region f",
-            "fix 1 all pe_jump/async 5 fast", other, "timestep 0.004",
-            "thermo 0"});
+            "fix 1 all pe_jump/async 5 fast", other, "timestep 0.004", "thermo 0"});
     s.cmd("run 50 post no");
   };
   EXPECT_NO_THROW(run_with("fix 2 all ave/time 1 10 10 c_thermo_temp"));
   for (const std::string other :
-       {"fix 2 all temp/berendsen 1.0 1.0 0.1",
-        "fix 2 all momentum 1 linear 1 1 1",
+       {"fix 2 all temp/berendsen 1.0 1.0 0.1", "fix 2 all momentum 1 linear 1 1 1",
         "fix 2 all temp/rescale 7 1.0 1.0 0.01 1.0"}) {
     try {
       run_with(other);
       ADD_FAILURE() << other << " was not refused";
     } catch (LAMMPS_NS::LAMMPSException &e) {
-      EXPECT_THAT(e.what(), ContainsRegex("changed velocities during the run"))
-          << other;
+      EXPECT_THAT(e.what(), ContainsRegex("changed velocities during the run")) << other;
     }
   }
 }
@@ -799,17 +767,15 @@ TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused) {
    the last coarse step of the run
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, WallReflectOnEitherClockIsRefused) {
+TEST(PEJumpAsync, WallReflectOnEitherClockIsRefused)
+{
   const auto error_with = [](const std::string &fast, int steps) {
     Sim s;
-    s.cmds({"units lj", "atom_style atomic", "atom_modify map array",
-            "boundary p p f", "region box block 0 10 0 10 0 10",
-            "create_box 1 box", "create_atoms 1 single 5 5 0.5",
-            "create_atoms 1 single 2 2 8", "mass 1 1.0",
-            "pair_style lj/cut 1.0", "pair_coeff 1 1 1.0 1.0 1.0",
-            "neighbor 0.3 bin", "group fast id " + fast,
-            "velocity all set 0 0 0", "set atom 1 vz -1.0",
-            "fix int all pe_jump/async 10 fast",
+    s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p f",
+            "region box block 0 10 0 10 0 10", "create_box 1 box", "create_atoms 1 single 5 5 0.5",
+            "create_atoms 1 single 2 2 8", "mass 1 1.0", "pair_style lj/cut 1.0",
+            "pair_coeff 1 1 1.0 1.0 1.0", "neighbor 0.3 bin", "group fast id " + fast,
+            "velocity all set 0 0 0", "set atom 1 vz -1.0", "fix int all pe_jump/async 10 fast",
             "fix w all wall/reflect zlo EDGE", "timestep 0.01", "thermo 0"});
     try {
       s.cmd(fmt::format("run {}", steps));
@@ -817,14 +783,12 @@ TEST(PEJumpAsync, WallReflectOnEitherClockIsRefused) {
       return std::string(e.what());
     }
     // without the refusal the atom bounced: its velocity points up
-    return fmt::format("no error, vz {}",
-                       s.lmp->atom->v[s.lmp->atom->map(1)][2]);
+    return fmt::format("no error, vz {}", s.lmp->atom->v[s.lmp->atom->map(1)][2]);
   };
   // atom 1 reaches the wall at t = 0.5 (step 50)
   for (const std::string fast : {"1", "2"})
     for (const int steps : {200, 60}) {
-      EXPECT_THAT(error_with(fast, steps),
-                  ContainsRegex("changed velocities during the run"))
+      EXPECT_THAT(error_with(fast, steps), ContainsRegex("changed velocities during the run"))
           << "fast group: atom " << fast << ", run " << steps;
     }
 }
@@ -845,7 +809,8 @@ namespace {
 // 2d triangular lattice (spacing 1, 168 atoms) of harmonic bonds, no pair
 // style: the atoms in region core are type 2, group stiff (stiff bonds among
 // them); region wide is the band core with the rows next to it (periodic)
-void bonded_lattice(Sim &s, const std::string &core, double skin) {
+void bonded_lattice(Sim &s, const std::string &core, double skin)
+{
   s.cmds({"units lj",
           "dimension 2",
           "atom_style bond",
@@ -853,8 +818,7 @@ void bonded_lattice(Sim &s, const std::string &core, double skin) {
           "boundary p p p",
           "lattice hex 1.1547005383792515",
           "region box block 0 12 0 7 -0.5 0.5",
-          "create_box 2 box bond/types 2 extra/bond/per/atom 6 "
-          "extra/special/per/atom 20",
+          "create_box 2 box bond/types 2 extra/bond/per/atom 6 extra/special/per/atom 20",
           "create_atoms 1 box",
           "mass * 1.0",
           "region core " + core,
@@ -882,69 +846,49 @@ void bonded_lattice(Sim &s, const std::string &core, double skin) {
 
 struct LatticeRun {
   std::vector<double> x;
-  LAMMPS_NS::bigint builds; // neighbor list builds
-  int nfirst;               // owned atoms that LAMMPS clears and checks
+  LAMMPS_NS::bigint builds;    // neighbor list builds
+  int nfirst;                  // owned atoms that LAMMPS clears and checks
 };
 
 // include: the group of the opt-in ("" = without it, then without sorting
 // too, which atom_modify first turns off)
 LatticeRun lattice_run(const std::string &core, const std::string &include,
-                       const std::vector<std::string> &run, double skin) {
+                       const std::vector<std::string> &run, double skin)
+{
   Sim s;
   bonded_lattice(s, core, skin);
   if (include.empty()) {
     s.cmd("atom_modify sort 0 0.0");
   } else {
-    s.cmds({"group fine " + include, "atom_modify first fine",
-            "neigh_modify include fine"});
+    s.cmds({"group fine " + include, "atom_modify first fine", "neigh_modify include fine"});
   }
   s.cmds(run);
   return {positions(s), s.lmp->neighbor->ncalls,
           include.empty() ? s.lmp->atom->nlocal : s.lmp->atom->nfirst};
 }
 
-} // namespace
+}    // namespace
 
-TEST(PEJumpAsync, IncludeGroupKeepsTheTrajectory) {
+TEST(PEJumpAsync, IncludeGroupKeepsTheTrajectory)
+{
   struct Case {
     std::string what, core, include;
     std::vector<std::string> run;
     double skin, tolerance;
   };
-  const std::string band = "block INF INF 0 1.6 INF INF",
-                    disc = "sphere 6 6 0 3.5 side in";
+  const std::string band = "block INF INF 0 1.6 INF INF", disc = "sphere 6 6 0 3.5 side in";
   const std::string async = "fix 1 all pe_jump/async 10 stiff";
   const std::vector<Case> cases = {
       {"midpoint", band, "type 2", {async, "run 400"}, 0.3, 0.0},
-      {"lobatto 3",
-       band,
-       "type 2",
-       {async + " quadrature lobatto 3", "run 400"},
-       0.3,
-       0.0},
+      {"lobatto 3", band, "type 2", {async + " quadrature lobatto 3", "run 400"}, 0.3, 0.0},
       // energy tallies: complete evaluations write forces on every atom
       {"tallies", band, "type 2", {async, "thermo 7", "run 400"}, 0.3, 0.0},
       // a small skin: the slow atoms outside the group trigger rebuilds
-      {"rebuilds",
-       band,
-       "type 2",
-       {async + " quadrature lobatto 3", "run 400"},
-       0.1,
-       0.0},
+      {"rebuilds", band, "type 2", {async + " quadrature lobatto 3", "run 400"}, 0.1, 0.0},
       // two runs, the second inside a coarse step, one without setup
-      {"split runs",
-       band,
-       "type 2",
-       {async, "run 203", "run 97 pre no", "run 100"},
-       0.1,
-       0.0},
+      {"split runs", band, "type 2", {async, "run 203", "run 97 pre no", "run 100"}, 0.1, 0.0},
       // (the row at the top is stored after the others: reordered)
-      {"buffer",
-       band,
-       "region wide",
-       {async + " buffer 1", "run 400"},
-       0.3,
-       1e-12},
+      {"buffer", band, "region wide", {async + " buffer 1", "run 400"}, 0.3, 1e-12},
       {"disc",
        disc,
        "type 2",
@@ -960,8 +904,7 @@ TEST(PEJumpAsync, IncludeGroupKeepsTheTrajectory) {
     EXPECT_GT(first.nfirst, 0) << c.what;
     EXPECT_LE(max_diff(plain.x, first.x), c.tolerance) << c.what;
     EXPECT_EQ(plain.builds, first.builds) << c.what;
-    if (c.skin < 0.1)
-      EXPECT_GT(plain.builds, 3) << c.what;
+    if (c.skin < 0.1) EXPECT_GT(plain.builds, 3) << c.what;
   }
 }
 
@@ -973,7 +916,8 @@ TEST(PEJumpAsync, IncludeGroupKeepsTheTrajectory) {
    tallies, the opt-in and split runs
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, OpeningTheNextFineStepAheadKeepsTheTrajectory) {
+TEST(PEJumpAsync, OpeningTheNextFineStepAheadKeepsTheTrajectory)
+{
   struct Case {
     std::string what, include;
     std::vector<std::string> run;
@@ -984,10 +928,7 @@ TEST(PEJumpAsync, OpeningTheNextFineStepAheadKeepsTheTrajectory) {
   const std::vector<Case> cases = {
       {"rebuilds", "", {async, "thermo 7", "run 400"}, 0.1},
       {"opt-in", "type 2", {async, "thermo 7", "run 400"}, 0.1},
-      {"buffer",
-       "",
-       {async + " buffer 1", "thermo 13", "run 203", "run 197 pre no"},
-       0.1},
+      {"buffer", "", {async + " buffer 1", "thermo 13", "run 203", "run 197 pre no"}, 0.1},
   };
   for (const auto &c : cases) {
     auto looked = c.run;
@@ -1005,13 +946,12 @@ TEST(PEJumpAsync, OpeningTheNextFineStepAheadKeepsTheTrajectory) {
    what the opt-in cannot work with is refused
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, IncludeGroupRefusals) {
-  const auto error_with = [](const std::string &include,
-                             const std::vector<std::string> &more) {
+TEST(PEJumpAsync, IncludeGroupRefusals)
+{
+  const auto error_with = [](const std::string &include, const std::vector<std::string> &more) {
     Sim s;
     bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
-    s.cmds({"group fine " + include, "atom_modify first fine",
-            "neigh_modify include fine"});
+    s.cmds({"group fine " + include, "atom_modify first fine", "neigh_modify include fine"});
     try {
       s.cmds(more);
     } catch (LAMMPS_NS::LAMMPSException &e) {
@@ -1020,31 +960,20 @@ TEST(PEJumpAsync, IncludeGroupRefusals) {
     return std::string("no error");
   };
   const std::string async = "fix 1 all pe_jump/async 10 stiff";
-  EXPECT_THAT(error_with("type 2", {async, "run 10"}),
-              ContainsRegex("no error"));
+  EXPECT_THAT(error_with("type 2", {async, "run 10"}), ContainsRegex("no error"));
   EXPECT_THAT(error_with("id 1:10", {async, "run 0"}),
-              ContainsRegex(
-                  "atoms on the fine clock \\(the fast group\\) are not in the "
-                  "neigh_modify include group fine"));
-  EXPECT_THAT(
-      error_with("type 2", {async + " buffer 1", "run 0"}),
-      ContainsRegex("fast group and its buffer layers\\) are not in the"));
-  EXPECT_THAT(
-      error_with("type 2",
-                 {"pair_style zero 1.0", "pair_coeff * *", async, "run 0"}),
-      ContainsRegex(
-          "pair forces of the atoms outside it \\(pair style zero\\) would be "
-          "lost"));
-  EXPECT_THAT(
-      error_with("type 2", {"fix 1 all pe_jump", "run 0"}),
-      ContainsRegex(
-          "moves every atom of its group every step, but 120 of them are not"));
-  EXPECT_THAT(error_with("type 2", {"fix 1 stiff pe_jump", "run 5"}),
-              ContainsRegex("no error"));
-  EXPECT_THAT(
-      error_with("type 2", {async, "fix 3 all deform 1 x scale 1.01", "run 0"}),
-      ContainsRegex(
-          "does not support a box or processor subdomains that change"));
+              ContainsRegex("atoms on the fine clock \\(the fast group\\) are not in the "
+                            "neigh_modify include group fine"));
+  EXPECT_THAT(error_with("type 2", {async + " buffer 1", "run 0"}),
+              ContainsRegex("fast group and its buffer layers\\) are not in the"));
+  EXPECT_THAT(error_with("type 2", {"pair_style zero 1.0", "pair_coeff * *", async, "run 0"}),
+              ContainsRegex("pair forces of the atoms outside it \\(pair style zero\\) would be "
+                            "lost"));
+  EXPECT_THAT(error_with("type 2", {"fix 1 all pe_jump", "run 0"}),
+              ContainsRegex("moves every atom of its group every step, but 120 of them are not"));
+  EXPECT_THAT(error_with("type 2", {"fix 1 stiff pe_jump", "run 5"}), ContainsRegex("no error"));
+  EXPECT_THAT(error_with("type 2", {async, "fix 3 all deform 1 x scale 1.01", "run 0"}),
+              ContainsRegex("does not support a box or processor subdomains that change"));
 }
 
 /* ----------------------------------------------------------------------
@@ -1054,7 +983,8 @@ TEST(PEJumpAsync, IncludeGroupRefusals) {
    not cross, and covers the band's images across the periodic boundary)
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, DynamicFastGroupEqualsStaticWhenItsRegionStays) {
+TEST(PEJumpAsync, DynamicFastGroupEqualsStaticWhenItsRegionStays)
+{
   const std::string band = "block INF INF 0 1.6 INF INF";
   for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
     std::vector<double> x[2];
@@ -1062,15 +992,12 @@ TEST(PEJumpAsync, DynamicFastGroupEqualsStaticWhenItsRegionStays) {
       Sim s;
       bonded_lattice(s, band, 0.3);
       s.cmds({"region low block INF INF -0.25 1.75 INF INF",
-              "region high block INF INF 6.75 INF INF INF",
-              "region stays union 2 low high",
-              dynamic ? "group fast dynamic all region stays every 10"
-                      : "group fast region stays",
-              "fix 1 all pe_jump/async 10 fast" + rule, "thermo 50",
-              "run 400"});
+              "region high block INF INF 6.75 INF INF INF", "region stays union 2 low high",
+              dynamic ? "group fast dynamic all region stays every 10" : "group fast region stays",
+              "fix 1 all pe_jump/async 10 fast" + rule, "thermo 50", "run 400"});
       x[dynamic] = positions(s);
       EXPECT_EQ(s.eval("count(fast)"), 48.0) << rule;
-      EXPECT_GT(s.vec("1", 8), 10.0) << rule; // atoms of the class fast
+      EXPECT_GT(s.vec("1", 8), 10.0) << rule;    // atoms of the class fast
     }
     EXPECT_EQ(max_diff(x[0], x[1]), 0.0) << rule;
   }
@@ -1085,18 +1012,19 @@ TEST(PEJumpAsync, DynamicFastGroupEqualsStaticWhenItsRegionStays) {
 namespace {
 
 // the lattice with soft bonds only, over which a fast region sweeps
-void moving_region(Sim &s, const std::string &rule) {
+void moving_region(Sim &s, const std::string &rule)
+{
   bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
   s.cmds({"bond_coeff 2 1.0 1.0", "variable xc equal 2.0+0.02*step",
           "region mov sphere v_xc 6.0621778 0 2.5 side in units box",
-          "group fast dynamic all region mov every 10",
-          "fix 1 all pe_jump/async 10 fast" + rule,
-          "variable px equal mass(all)*vcm(all,x)",
-          "variable py equal mass(all)*vcm(all,y)", "thermo 10"});
+          "group fast dynamic all region mov every 10", "fix 1 all pe_jump/async 10 fast" + rule,
+          "variable px equal mass(all)*vcm(all,x)", "variable py equal mass(all)*vcm(all,y)",
+          "thermo 10"});
 }
 
 // per atom ID: 1 if on the fine clock (class mixed or fast), serial runs
-std::vector<int> on_fine_clock(Sim &s) {
+std::vector<int> on_fine_clock(Sim &s)
+{
   const auto *klass = s.lmp->modify->get_fix_by_id("1")->vector_atom;
   std::vector<int> fine(s.lmp->atom->natoms + 1, 0);
   for (int i = 0; i < s.lmp->atom->nlocal; i++)
@@ -1104,9 +1032,10 @@ std::vector<int> on_fine_clock(Sim &s) {
   return fine;
 }
 
-} // namespace
+}    // namespace
 
-TEST(PEJumpAsync, ClockChangesConserveMomentum) {
+TEST(PEJumpAsync, ClockChangesConserveMomentum)
+{
   for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
     Sim s;
     moving_region(s, rule);
@@ -1116,8 +1045,8 @@ TEST(PEJumpAsync, ClockChangesConserveMomentum) {
     double worst = 0.0;
     for (int block = 1; block <= 40; block++) {
       s.cmd("run 10 post no");
-      worst = std::max({worst, std::fabs(s.eval("v_px") - p0[0]),
-                        std::fabs(s.eval("v_py") - p0[1])});
+      worst =
+          std::max({worst, std::fabs(s.eval("v_px") - p0[0]), std::fabs(s.eval("v_py") - p0[1])});
     }
     const auto fine1 = on_fine_clock(s);
     int joined = 0, left = 0;
@@ -1141,18 +1070,17 @@ TEST(PEJumpAsync, ClockChangesConserveMomentum) {
    one complete evaluation
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode) {
+TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
+{
   const double h = 0.005;
   for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
     Sim s(MPI_COMM_WORLD, false);
     moving_region(s, rule);
-    // the criterion sees the node's step, as LAMMPS' own update of step 200
-    // would
+    // the criterion sees the node's step, as LAMMPS' own update of step 200 would
     s.cmds({"variable xc equal 2.0+3.0*(step==200)", "thermo 0"});
     // the node of step 200 (positions, velocities, classes) and the
     // cumulative evaluations of every step, in one run
-    s.cmds({"fix node all store/state 200 x y vx vy f_1",
-            "fix evals all vector 1 f_1[5]"});
+    s.cmds({"fix node all store/state 200 x y vx vy f_1", "fix evals all vector 1 f_1[5]"});
     ::testing::internal::CaptureStdout();
     s.cmd("run 201");
     const std::string log = ::testing::internal::GetCapturedStdout();
@@ -1171,8 +1099,8 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode) {
     }
     auto *cumulative = s.lmp->modify->get_fix_by_id("evals");
     const int stored = cumulative->size_vector;
-    const double evals = cumulative->compute_vector(stored - 1) -
-                         cumulative->compute_vector(stored - 2);
+    const double evals =
+        cumulative->compute_vector(stored - 1) - cumulative->compute_vector(stored - 2);
     const auto fine1 = on_fine_clock(s);
 
     // the forces at the node, from scratch
@@ -1180,24 +1108,21 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode) {
     moving_region(r, "");
     r.cmds({"unfix 1", "fix 1 all nve"});
     for (int id = 1; id <= natoms; id++)
-      for (int k = 0; k < 2; k++)
-        r.lmp->atom->x[r.lmp->atom->map(id)][k] = x0[3 * id + k];
+      for (int k = 0; k < 2; k++) r.lmp->atom->x[r.lmp->atom->map(id)][k] = x0[3 * id + k];
     r.cmds({"run 0 post no"});
 
     const double *prd = s.lmp->domain->prd;
     double shift[3] = {0.0, 0.0, 0.0}, spread = 0.0, largest = 0.0;
     int changed = 0;
     for (int id = 1; id <= natoms; id++) {
-      if (fine0[id] == fine1[id])
-        continue;
+      if (fine0[id] == fine1[id]) continue;
       const double step = fine1[id] ? h : 10.0 * h;
       for (int k = 0; k < 2; k++) {
         double d = s.x(id, k) - x0[3 * id + k];
         d -= prd[k] * std::round(d / prd[k]);
         const double jump = 2.0 * (d / h - v0[3 * id + k]);
         const double kick = step * r.lmp->atom->f[r.lmp->atom->map(id)][k];
-        if (!changed)
-          shift[k] = jump - kick;
+        if (!changed) shift[k] = jump - kick;
         spread = std::max(spread, std::fabs(jump - kick - shift[k]));
         largest = std::max(largest, std::fabs(kick));
       }
@@ -1207,10 +1132,9 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode) {
     // the fix's count of clock changes in the log: those at node 200 and a
     // few of thermal motion at the region's boundary before
     std::smatch count;
-    ASSERT_TRUE(
-        std::regex_search(log, count,
-                          std::regex("Fix pe_jump/async: (\\d+) atoms changed "
-                                     "clock at (\\d+) of 21 coarse nodes")))
+    ASSERT_TRUE(std::regex_search(
+        log, count,
+        std::regex("Fix pe_jump/async: (\\d+) atoms changed clock at (\\d+) of 21 coarse nodes")))
         << rule;
     EXPECT_GE(std::stoi(count[1]), changed) << rule;
     EXPECT_LE(std::stoi(count[1]), changed + 5) << rule;
@@ -1219,8 +1143,7 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode) {
     EXPECT_LT(spread, 1e-10) << rule;
     // the forces at the node cost less than a complete evaluation on top
     // of the step's own
-    if (rule.find("lobatto") == std::string::npos)
-      EXPECT_LT(evals - s.vec("1", 3), 1.0) << rule;
+    if (rule.find("lobatto") == std::string::npos) EXPECT_LT(evals - s.vec("1", 3), 1.0) << rule;
   }
 }
 
@@ -1229,13 +1152,13 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode) {
    and the same sum of IDs (10 and 13 for 11 and 12) changes the clocks
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, ClocksFollowAGroupThatKeepsItsSizeAndIDSum) {
+TEST(PEJumpAsync, ClocksFollowAGroupThatKeepsItsSizeAndIDSum)
+{
   Sim s;
   moving_region(s, "");
-  s.cmds({"variable swap atom "
-          "(step<=100)*(id==10||id==13)+(step>100)*(id==11||id==12)",
-          "group pair dynamic all var swap every 10", "unfix 1",
-          "fix 1 all pe_jump/async 10 pair", "run 200"});
+  s.cmds({"variable swap atom (step<=100)*(id==10||id==13)+(step>100)*(id==11||id==12)",
+          "group pair dynamic all var swap every 10", "unfix 1", "fix 1 all pe_jump/async 10 pair",
+          "run 200"});
   const auto fine = on_fine_clock(s);
   EXPECT_EQ(fine[10] + fine[13], 0);
   EXPECT_EQ(fine[11] + fine[12], 2);
@@ -1246,7 +1169,8 @@ TEST(PEJumpAsync, ClocksFollowAGroupThatKeepsItsSizeAndIDSum) {
    first coarse node after each update (every N steps)
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated) {
+TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated)
+{
   std::map<int, std::vector<int>> tally;
   for (const int every : {5, 10, 30}) {
     Sim s(MPI_COMM_WORLD, false);
@@ -1259,10 +1183,9 @@ TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated) {
     s.cmd("run 300");
     const std::string log = ::testing::internal::GetCapturedStdout();
     std::smatch count;
-    ASSERT_TRUE(
-        std::regex_search(log, count,
-                          std::regex("Fix pe_jump/async: (\\d+) atoms changed "
-                                     "clock at (\\d+) of 30 coarse nodes")))
+    ASSERT_TRUE(std::regex_search(
+        log, count,
+        std::regex("Fix pe_jump/async: (\\d+) atoms changed clock at (\\d+) of 30 coarse nodes")))
         << every;
     tally[every] = {std::stoi(count[1]), std::stoi(count[2])};
   }
@@ -1278,13 +1201,12 @@ TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated) {
   bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
   s.cmds({"bond_coeff 2 1.0 1.0", "variable xc equal 2.0+0.02*step",
           "region mov sphere v_xc 6.0621778 0 2.5 side in units box",
-          "group fast dynamic all region mov every 10",
-          "fix 1 all pe_jump/async 10 fast", "thermo 0", "run 100 post no"});
+          "group fast dynamic all region mov every 10", "fix 1 all pe_jump/async 10 fast",
+          "thermo 0", "run 100 post no"});
   ::testing::internal::CaptureStdout();
   s.cmd("run 100 pre no post no");
   const std::string log = ::testing::internal::GetCapturedStdout();
-  EXPECT_THAT(
-      log, ContainsRegex("atoms changed clock at [0-9]+ of 10 coarse nodes"));
+  EXPECT_THAT(log, ContainsRegex("atoms changed clock at [0-9]+ of 10 coarse nodes"));
 }
 
 /* ----------------------------------------------------------------------
@@ -1293,7 +1215,8 @@ TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated) {
    (a group of the fix) and the clocks' state are in the restart file
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, RestartAcrossClockChangesIsExact) {
+TEST(PEJumpAsync, RestartAcrossClockChangesIsExact)
+{
   for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
     std::vector<double> unbroken, restarted;
     double prd[3];
@@ -1302,16 +1225,15 @@ TEST(PEJumpAsync, RestartAcrossClockChangesIsExact) {
       moving_region(s, rule);
       s.cmds({"run 400"});
       unbroken = positions(s);
-      for (int k = 0; k < 3; k++)
-        prd[k] = s.lmp->domain->prd[k];
+      for (int k = 0; k < 3; k++) prd[k] = s.lmp->domain->prd[k];
     }
     {
       Sim s;
       moving_region(s, rule);
       s.cmds({"run 200", "write_restart pe_jump_dyn.restart", "clear",
-              "read_restart pe_jump_dyn.restart", "comm_modify cutoff 2.5",
-              "neighbor 0.3 bin", "neigh_modify every 1 delay 0 check yes",
-              "fix 2d all enforce2d", "variable xc equal 2.0+0.02*step",
+              "read_restart pe_jump_dyn.restart", "comm_modify cutoff 2.5", "neighbor 0.3 bin",
+              "neigh_modify every 1 delay 0 check yes", "fix 2d all enforce2d",
+              "variable xc equal 2.0+0.02*step",
               "region mov sphere v_xc 6.0621778 0 2.5 side in units box",
               "group fast dynamic all region mov every 10",
               "fix 1 all pe_jump/async 10 fast" + rule, "run 200"});
@@ -1325,7 +1247,7 @@ TEST(PEJumpAsync, RestartAcrossClockChangesIsExact) {
       const double d = restarted[n] - unbroken[n];
       worst = std::max(worst, std::fabs(d - box * std::round(d / box)));
     }
-    EXPECT_LT(worst, 1e-13) << rule; // the restart sorts the atoms: round-off
+    EXPECT_LT(worst, 1e-13) << rule;    // the restart sorts the atoms: round-off
   }
 }
 
@@ -1338,15 +1260,15 @@ TEST(PEJumpAsync, RestartAcrossClockChangesIsExact) {
    9e-4 off)
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, BufferAroundADynamicGroupIsTheSameInSplitRuns) {
+TEST(PEJumpAsync, BufferAroundADynamicGroupIsTheSameInSplitRuns)
+{
   const auto run = [](const std::vector<std::string> &runs) {
     Sim s;
     lj_liquid(s);
     s.cmds({"variable zc equal 2.0+0.02*step",
             "region mov sphere 3.36 3.36 v_zc 1.5 side in units box",
-            "group fast dynamic all region mov every 5",
-            "fix 1 all pe_jump/async 5 fast buffer 1", "timestep 0.002",
-            "thermo 0"});
+            "group fast dynamic all region mov every 5", "fix 1 all pe_jump/async 5 fast buffer 1",
+            "timestep 0.002", "thermo 0"});
     s.cmds(runs);
     return unwrapped_positions(s);
   };
@@ -1361,28 +1283,27 @@ TEST(PEJumpAsync, BufferAroundADynamicGroupIsTheSameInSplitRuns) {
    local, and the momentum stays exact
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, FastAutoTakesAHotAtomOnTheFineClock) {
+TEST(PEJumpAsync, FastAutoTakesAHotAtomOnTheFineClock)
+{
   for (const std::string rule : {"", " quadrature lobatto 3"}) {
     Sim s;
     bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.5);
-    s.cmds({"bond_coeff 2 1.0 1.0", "group fast id 100000",
-            "velocity all set 0 0 0", "group hot id 90",
-            "velocity hot set 2.0 1.0 0.0",
+    s.cmds({"bond_coeff 2 1.0 1.0", "group fast id 100000", "velocity all set 0 0 0",
+            "group hot id 90", "velocity hot set 2.0 1.0 0.0",
             "fix 1 all pe_jump/async 10 fast fast auto 0.1" + rule,
-            "variable px equal mass(all)*vcm(all,x)",
-            "variable py equal mass(all)*vcm(all,y)", "run 0"});
+            "variable px equal mass(all)*vcm(all,x)", "variable py equal mass(all)*vcm(all,y)",
+            "run 0"});
     const double p0[2] = {s.eval("v_px"), s.eval("v_py")};
     double worst = 0.0, most = 0.0;
     for (int block = 1; block <= 20; block++) {
       s.cmd("run 10 post no");
-      worst = std::max({worst, std::fabs(s.eval("v_px") - p0[0]),
-                        std::fabs(s.eval("v_py") - p0[1])});
+      worst =
+          std::max({worst, std::fabs(s.eval("v_px") - p0[0]), std::fabs(s.eval("v_py") - p0[1])});
       most = std::max(most, s.vec("1", 7) + s.vec("1", 8));
-      if (block == 1)
-        EXPECT_EQ(on_fine_clock(s)[90], 1) << rule;
+      if (block == 1) EXPECT_EQ(on_fine_clock(s)[90], 1) << rule;
     }
     EXPECT_GE(most, 1.0) << rule;
-    EXPECT_LT(most, 40.0) << rule; // of 168: the choice is local
+    EXPECT_LT(most, 40.0) << rule;    // of 168: the choice is local
     EXPECT_LT(worst, 1e-13) << rule;
   }
 }
@@ -1392,12 +1313,12 @@ TEST(PEJumpAsync, FastAutoTakesAHotAtomOnTheFineClock) {
    restored state, so the continued run is the unbroken one
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, FastAutoRestartIsExact) {
+TEST(PEJumpAsync, FastAutoRestartIsExact)
+{
   const std::string fix = "fix 1 all pe_jump/async 10 none fast auto 0.03";
   const auto setup = [](Sim &s) {
     bonded_lattice(s, "block INF INF 0 1.6 INF INF", 0.3);
-    s.cmds({"bond_coeff 2 1.0 1.0", "group none id 0",
-            "velocity all create 0.2 8191"});
+    s.cmds({"bond_coeff 2 1.0 1.0", "group none id 0", "velocity all create 0.2 8191"});
   };
   std::vector<double> unbroken, restarted;
   double prd[3], changed = 0.0;
@@ -1408,31 +1329,26 @@ TEST(PEJumpAsync, FastAutoRestartIsExact) {
     const auto fine0 = on_fine_clock(s);
     s.cmd("run 200");
     const auto fine1 = on_fine_clock(s);
-    for (size_t id = 1; id < fine0.size(); id++)
-      changed += (fine0[id] != fine1[id]) ? 1.0 : 0.0;
+    for (size_t id = 1; id < fine0.size(); id++) changed += (fine0[id] != fine1[id]) ? 1.0 : 0.0;
     unbroken = positions(s);
-    for (int k = 0; k < 3; k++)
-      prd[k] = s.lmp->domain->prd[k];
+    for (int k = 0; k < 3; k++) prd[k] = s.lmp->domain->prd[k];
   }
   {
     Sim s;
     setup(s);
-    s.cmds({fix, "thermo 10", "run 200", "write_restart pe_jump_auto.restart",
-            "clear", "read_restart pe_jump_auto.restart",
-            "comm_modify cutoff 2.5", "neighbor 0.3 bin",
-            "neigh_modify every 1 delay 0 check yes", "fix 2d all enforce2d",
-            fix, "run 200"});
+    s.cmds({fix, "thermo 10", "run 200", "write_restart pe_jump_auto.restart", "clear",
+            "read_restart pe_jump_auto.restart", "comm_modify cutoff 2.5", "neighbor 0.3 bin",
+            "neigh_modify every 1 delay 0 check yes", "fix 2d all enforce2d", fix, "run 200"});
     restarted = positions(s);
     std::remove("pe_jump_auto.restart");
   }
-  EXPECT_GT(changed, 5.0); // the choice changed across the restart
+  EXPECT_GT(changed, 5.0);    // the choice changed across the restart
   double worst = 0.0;
   for (size_t n = 0; n < unbroken.size(); n++) {
     const double d = restarted[n] - unbroken[n];
-    worst =
-        std::max(worst, std::fabs(d - prd[n % 3] * std::round(d / prd[n % 3])));
+    worst = std::max(worst, std::fabs(d - prd[n % 3] * std::round(d / prd[n % 3])));
   }
-  EXPECT_LT(worst, 1e-13); // the restart sorts the atoms: round-off
+  EXPECT_LT(worst, 1e-13);    // the restart sorts the atoms: round-off
 }
 
 /* ----------------------------------------------------------------------
@@ -1442,22 +1358,20 @@ TEST(PEJumpAsync, FastAutoRestartIsExact) {
    (lobatto 3 on the quartic chain, as in PseudoEnergyConservedAtCoarseNodes)
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, StepChangesInsideCoarseStepsKeepThePseudoEnergy) {
+TEST(PEJumpAsync, StepChangesInsideCoarseStepsKeepThePseudoEnergy)
+{
   for (const std::string how : {"timestep", "dt/reset"}) {
     Sim s;
     chain(s);
     // compensate no: the jumps are carried over a new time step between runs
-    s.cmds(
-        {"fix 1 chain pe_jump/async 10 fast quadrature lobatto 3 compensate no",
-         "timestep 2e-4", "thermo 0", "run 0 post no"});
+    s.cmds({"fix 1 chain pe_jump/async 10 fast quadrature lobatto 3 compensate no", "timestep 2e-4",
+            "thermo 0", "run 0 post no"});
     const double h0 = s.eval("c_thermo_pe+f_1");
-    if (how == "dt/reset")
-      s.cmd("fix dt all dt/reset 3 1e-4 3e-4 0.00002 units box");
+    if (how == "dt/reset") s.cmd("fix dt all dt/reset 3 1e-4 3e-4 0.00002 units box");
     double worst = 0.0, smallest = 2e-4, largest = 2e-4;
     for (int n = 0; n < 200; ++n) {
       // runs of 7 steps: the changes fall inside coarse steps of 10
-      if (how == "timestep")
-        s.cmd(fmt::format("timestep {}", (n % 3 == 0) ? 1.5e-4 : 2.5e-4));
+      if (how == "timestep") s.cmd(fmt::format("timestep {}", (n % 3 == 0) ? 1.5e-4 : 2.5e-4));
       s.cmd(how == "timestep" ? "run 7 pre no post no" : "run 7 post no");
       smallest = std::min(smallest, s.lmp->update->dt);
       largest = std::max(largest, s.lmp->update->dt);
@@ -1465,7 +1379,7 @@ TEST(PEJumpAsync, StepChangesInsideCoarseStepsKeepThePseudoEnergy) {
         worst = std::max(worst, std::fabs(s.eval("c_thermo_pe+f_1") - h0));
     }
     EXPECT_LT(largest / smallest, 10.0) << how;
-    EXPECT_GT(largest / smallest, 1.4) << how; // the step did change
+    EXPECT_GT(largest / smallest, 1.4) << how;    // the step did change
     // 1400 fine steps; the constant step gives 1.2e-14
     EXPECT_LT(worst / std::fabs(h0), 1e-13) << how;
   }
@@ -1480,55 +1394,45 @@ TEST(PEJumpAsync, StepChangesInsideCoarseStepsKeepThePseudoEnergy) {
    (the same waters with lj/cut/coul/cut: constant)
 ------------------------------------------------------------------------- */
 
-TEST(PEJumpAsync, PairForcesOnOtherAtomsAreRefused) {
+TEST(PEJumpAsync, PairForcesOnOtherAtomsAreRefused)
+{
   const auto waters = [](const std::string &pair) {
-    std::vector<std::string> c = {
-        "units real",
-        "atom_style full",
-        "atom_modify map array",
-        "region box block 0 10 0 10 0 10",
-        "create_box 2 box bond/types 1 angle/types 1 "
-        "extra/bond/per/atom 2 extra/angle/per/atom 1 "
-        "extra/special/per/atom 2",
-        "mass 1 1.008",
-        "mass 2 15.9994"};
+    std::vector<std::string> c = {"units real",
+                                  "atom_style full",
+                                  "atom_modify map array",
+                                  "region box block 0 10 0 10 0 10",
+                                  "create_box 2 box bond/types 1 angle/types 1 "
+                                  "extra/bond/per/atom 2 extra/angle/per/atom 1 "
+                                  "extra/special/per/atom 2",
+                                  "mass 1 1.008",
+                                  "mass 2 15.9994"};
     int id = 0;
     for (int m = 0; m < 8; m++) {
-      const double x = 1.0 + 5.0 * (m % 2), y = 1.0 + 5.0 * ((m / 2) % 2),
-                   z = 1.0 + 5.0 * (m / 4);
-      c.push_back(
-          fmt::format("create_atoms 2 single {} {} {} units box", x, y, z));
-      c.push_back(fmt::format("create_atoms 1 single {} {} {} units box",
-                              x + 0.9572, y, z));
-      c.push_back(fmt::format("create_atoms 1 single {} {} {} units box",
-                              x - 0.24, y + 0.927, z));
+      const double x = 1.0 + 5.0 * (m % 2), y = 1.0 + 5.0 * ((m / 2) % 2), z = 1.0 + 5.0 * (m / 4);
+      c.push_back(fmt::format("create_atoms 2 single {} {} {} units box", x, y, z));
+      c.push_back(fmt::format("create_atoms 1 single {} {} {} units box", x + 0.9572, y, z));
+      c.push_back(fmt::format("create_atoms 1 single {} {} {} units box", x - 0.24, y + 0.927, z));
       c.push_back(fmt::format("set atom {}*{} mol {}", id + 1, id + 3, m + 1));
       c.push_back(fmt::format("set atom {} charge -1.0484", id + 1));
       c.push_back(fmt::format("set atom {}*{} charge 0.5242", id + 2, id + 3));
-      c.push_back(fmt::format("create_bonds single/bond 1 {} {} special no",
-                              id + 1, id + 2));
-      c.push_back(fmt::format("create_bonds single/bond 1 {} {} special no",
-                              id + 1, id + 3));
-      c.push_back(fmt::format("create_bonds single/angle 1 {} {} {} special no",
-                              id + 2, id + 1, id + 3));
+      c.push_back(fmt::format("create_bonds single/bond 1 {} {} special no", id + 1, id + 2));
+      c.push_back(fmt::format("create_bonds single/bond 1 {} {} special no", id + 1, id + 3));
+      c.push_back(
+          fmt::format("create_bonds single/angle 1 {} {} {} special no", id + 2, id + 1, id + 3));
       id += 3;
     }
     c.insert(c.end(),
-             {"special_bonds lj/coul 0.0 0.0 0.5", pair,
-              "pair_coeff 2 2 0.1852 3.1589", "pair_coeff 1 * 0.0 0.0",
-              "bond_style harmonic", "bond_coeff 1 450 0.9572",
+             {"special_bonds lj/coul 0.0 0.0 0.5", pair, "pair_coeff 2 2 0.1852 3.1589",
+              "pair_coeff 1 * 0.0 0.0", "bond_style harmonic", "bond_coeff 1 450 0.9572",
               "angle_style harmonic", "angle_coeff 1 55 104.52",
-              "velocity all create 300 4711 mom yes", "neighbor 2.0 bin",
-              "group fast id 1:3", "variable px equal mass(all)*vcm(all,x)",
-              "fix 1 all pe_jump/async 4 fast", "timestep 0.25", "thermo 0"});
+              "velocity all create 300 4711 mom yes", "neighbor 2.0 bin", "group fast id 1:3",
+              "variable px equal mass(all)*vcm(all,x)", "fix 1 all pe_jump/async 4 fast",
+              "timestep 0.25", "thermo 0"});
     return c;
   };
-  EXPECT_THAT(
-      error_of(waters("pair_style lj/cut/tip4p/cut 2 1 1 1 0.1546 8.0"),
-               "run 1"),
-      ContainsRegex(
-          "cannot split pair style lj/cut/tip4p/cut: the force of a pair "
-          "acts on other atoms"));
+  EXPECT_THAT(error_of(waters("pair_style lj/cut/tip4p/cut 2 1 1 1 0.1546 8.0"), "run 1"),
+              ContainsRegex("cannot split pair style lj/cut/tip4p/cut: the force of a pair "
+                            "acts on other atoms"));
   Sim s;
   s.cmds(waters("pair_style lj/cut/coul/cut 8.0"));
   s.cmd("special_bonds lj/coul 0.0 0.0 0.5");

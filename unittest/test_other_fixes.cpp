@@ -557,8 +557,8 @@ TEST(PEJumpOtherFixes, NoDampingInRunsThatConserveEnergy)
     Sim s;
     lj_liquid(s, 4);
     // (thermo normalises etotal per atom in lj units)
-    s.cmds({"pair_modify shift yes", "fix 1 all " + integrator, other, "timestep 0.005",
-            "thermo 0", "variable e equal etotal", "run 500 post no"});
+    s.cmds({"pair_modify shift yes", "fix 1 all " + integrator, other, "timestep 0.005", "thermo 0",
+            "variable e equal etotal", "run 500 post no"});
     const double e0 = s.eval("v_e");
     s.cmd("run 3000 post no");
     return s.eval("v_e") - e0;
