@@ -207,8 +207,9 @@ void FixPEJump::init()
   // thermostats drive the parasitic period-2 mode, which the scheme does
   // not damp: damp it over the damp time (auto: beside thermostats only,
   // over AUTO_STEPS steps, from the start if one adds forces, else from
-  // the first step where a velocity changed)
-  damping->init(opts.damp_time, update->dt, others->thermostats() > 0,
+  // the first step where a velocity changed). Lobatto 2 is velocity
+  // Verlet, whose jumps [v]^n = h a^n have no such mode: auto leaves it be
+  damping->init(opts.damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
                 others->thermostat_forces() > 0);
   others->refuse_shared_atoms();
   others->refuse_for_rule(rule->name(), rule->node[rule->primary()] == 1.0, rule->only_end_nodes());
