@@ -165,6 +165,12 @@ void FixPEJumpAsync::post_constructor()
 
 FixPEJumpAsync::~FixPEJumpAsync()
 {
+  // removed inside a coarse step (unfix): whatever integrates the atoms
+  // next starts from the velocities, which must hold the fine impulses
+  // (not when LAMMPS is torn down: update and force are gone then)
+  if (update && force && modify->get_fix_by_id(id) && scheme && scheme->started && clocks &&
+      !clocks->at_coarse_node())
+    hand_over_impulses();
   if (modify->get_fix_by_id(id)) {
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
@@ -754,6 +760,7 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
 void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   catch_up_all();
+  if (with_start && !clocks->at_coarse_node()) hand_over_impulses();
   if (with_start) {
     clocks->begin_coarse();
     double **facc = state->vec(FACC);
@@ -789,6 +796,35 @@ std::string FixPEJumpAsync::instability_advice() const
                      opts.buffer_layers ? ""
                                         : ", or add the keyword buffer 1 (the slow partners of "
                                           "the interface then take the fine step)");
+}
+
+/* ----------------------------------------------------------------------
+   inside a coarse step a slow atom keeps its node velocity v^n of the
+   coarse step's start, and the impulse of the fine interactions on it
+   since then waits in FACC for the coarse node, while the fast atoms got
+   theirs at every fine step. When the coarse step is broken off (the
+   scheme restarts, the fix is removed) the slow atoms get that impulse,
+   so that the total momentum stays what the scheme left; the impulse of
+   the interactions among slow atoms over the broken coarse step, whose
+   sum is zero, is not given (an O(h) change of the slow velocities, as
+   from a new start of the scheme)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::hand_over_impulses()
+{
+  double **v = atom->v;
+  double **facc = state->vec(FACC);
+  const int *slow = assign->slow();
+  const double ftm2v = force->ftm2v;
+  const int *mask = atom->mask;
+  for (int i = 0; i < atom->nlocal; i++) {
+    if (!(mask[i] & groupbit) || !slow[i]) continue;
+    const double dv = ftm2v * scheme->inverse_mass_of(i);
+    for (int k = 0; k < 3; k++) {
+      v[i][k] += dv * facc[i][k];
+      facc[i][k] = 0.0;
+    }
+  }
 }
 
 /* ----------------------------------------------------------------------
@@ -1326,6 +1362,15 @@ void FixPEJumpAsync::restart(char *buf)
                    "restarts from the current state\n",
                    style);
   if (!clocks->restore(&list[6])) {
+    // inside a coarse step the slow atoms' impulses of the fine steps done
+    // belong to the old coarse step (see hand_over_impulses())
+    if (static_cast<int>(list[7]) != 0)
+      error->all(FLERR,
+                 "Fix pe_jump/async: the restart file was written inside a coarse step ({} of "
+                 "{} fine steps done), which K = {} cannot continue: read it with K = {}, or "
+                 "write restart files at coarse nodes (after multiples of K steps)",
+                 static_cast<int>(list[7]), static_cast<int>(list[6]), clocks->steps(),
+                 static_cast<int>(list[6]));
     if (scheme->started && (comm->me == 0))
       utils::logmesg(lmp,
                      "Fix {}: K differs from the restart file: the two-step scheme restarts "

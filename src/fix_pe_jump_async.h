@@ -131,7 +131,8 @@ class FixPEJumpAsync : public Fix {
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);
   void choose_fast(std::vector<int> &chosen) const;
   void restart_jumps(const std::vector<int> &to_fine, double **f);
-  void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
+  void store_start_node();      // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
+  void hand_over_impulses();    // inside a coarse step: the slow atoms get their fine impulses
   void continue_scheme();
   void node_impulses();
   void note_velocity_changes(const AtomList *);
