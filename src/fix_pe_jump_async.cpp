@@ -814,11 +814,12 @@ void FixPEJumpAsync::hand_over_impulses()
 {
   double **v = atom->v;
   double **facc = state->vec(FACC);
-  const int *slow = assign->slow();
   const double ftm2v = force->ftm2v;
   const int *mask = atom->mask;
+  // FACC is zero but for slow atoms (and moves with the atoms, which the
+  // clock flags may not have followed since the last run)
   for (int i = 0; i < atom->nlocal; i++) {
-    if (!(mask[i] & groupbit) || !slow[i]) continue;
+    if (!(mask[i] & groupbit)) continue;
     const double dv = ftm2v * scheme->inverse_mass_of(i);
     for (int k = 0; k < 3; k++) {
       v[i][k] += dv * facc[i][k];

@@ -269,14 +269,39 @@ bool InteractionSplit::pair_stays_in_lists()
 
 /* ---------------------------------------------------------------------- */
 
+std::vector<std::pair<int, int>> InteractionSplit::closest_pairs(const NeighList *list) const
+{
+  double **x = atom->x;
+  const int *type = atom->type;
+  const int ntypes = atom->ntypes;
+  std::vector<double> best((ntypes + 1) * (ntypes + 1), -1.0);
+  std::vector<std::pair<int, int>> chosen(best.size(), {-1, -1});
+  for (int ii = 0; ii < list->inum; ii++) {
+    const int i = list->ilist[ii];
+    for (int jj = 0; jj < list->numneigh[i]; jj++) {
+      const int j = list->firstneigh[i][jj] & NEIGHMASK;
+      double r2 = 0.0;
+      for (int k = 0; k < 3; k++) r2 += (x[i][k] - x[j][k]) * (x[i][k] - x[j][k]);
+      const int t = MIN(type[i], type[j]) * (ntypes + 1) + MAX(type[i], type[j]);
+      if ((best[t] < 0.0) || (r2 < best[t])) {
+        best[t] = r2;
+        chosen[t] = {i, list->firstneigh[i][jj]};
+      }
+    }
+  }
+  std::vector<std::pair<int, int>> found;
+  for (const auto &ij : chosen)
+    if (ij.first >= 0) found.push_back(ij);
+  return found;
+}
+
+/* ---------------------------------------------------------------------- */
+
 bool InteractionSplit::pair_forces_stay_on_pairs()
 {
   if (!force->pair || !force->pair->compute_flag || pairs.empty()) return true;
   restore();
   double **f = atom->f;
-  double **x = atom->x;
-  const int *type = atom->type;
-  const int ntypes = atom->ntypes;
   const int nall = atom->nlocal + atom->nghost;
   std::vector<double> fkeep(3 * nall);
   if (nall) std::copy(&f[0][0], &f[0][0] + 3 * nall, fkeep.begin());
@@ -286,25 +311,8 @@ bool InteractionSplit::pair_forces_stay_on_pairs()
     if (list->requestor_type != NeighList::PAIR) continue;
     auto *style = static_cast<Pair *>(list->requestor);
     if (!style) continue;
-    // per pair of atom types, the closest pair of the list: i and its raw
-    // neighbor entry (a style may treat types differently, e.g. TIP4P)
-    std::vector<double> best((ntypes + 1) * (ntypes + 1), -1.0);
-    std::vector<std::pair<int, int>> chosen(best.size(), {-1, -1});
-    for (int ii = 0; ii < list->inum; ii++) {
-      const int i = list->ilist[ii];
-      for (int jj = 0; jj < list->numneigh[i]; jj++) {
-        const int j = list->firstneigh[i][jj] & NEIGHMASK;
-        double r2 = 0.0;
-        for (int k = 0; k < 3; k++) r2 += (x[i][k] - x[j][k]) * (x[i][k] - x[j][k]);
-        const int t = MIN(type[i], type[j]) * (ntypes + 1) + MAX(type[i], type[j]);
-        if ((best[t] < 0.0) || (r2 < best[t])) {
-          best[t] = r2;
-          chosen[t] = {i, list->firstneigh[i][jj]};
-        }
-      }
-    }
-    for (const auto &ij : chosen) {
-      if (ij.first < 0) continue;
+    // a style may treat atom types differently (TIP4P): one pair of each
+    for (const auto &ij : closest_pairs(list)) {
       // the list cut to that pair, evaluated by its style alone
       const int i = ij.first, j = ij.second & NEIGHMASK;
       const int inum = list->inum, n_i = list->numneigh[i];

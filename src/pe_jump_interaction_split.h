@@ -16,6 +16,7 @@
 
 #include "pointers.h"
 
+#include <utility>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -71,8 +72,9 @@ namespace PEJump {
     bool pair_stays_in_lists();
     // true if each pair style puts the forces of a pair on its two atoms
     // only: evaluated with its list cut to one pair (the closest of each
-    // pair of atom types), it must give no force on other atoms (a hydrogen bond style acts on the hydrogen,
-    // TIP4P styles on the atoms of both molecules). Collective
+    // pair of atom types), it must give no force on other atoms (a
+    // hydrogen bond style acts on the hydrogen, TIP4P styles on the atoms
+    // of both molecules). Collective
     bool pair_forces_stay_on_pairs();
 
     // fraction of all interactions that a subset holds (global)
@@ -122,6 +124,8 @@ namespace PEJump {
       PairSubset part[2];
     };
     std::vector<PairList> pairs;
+    // per pair of atom types, the closest pair of a list: (i, raw entry j)
+    std::vector<std::pair<int, int>> closest_pairs(const NeighList *) const;
     std::vector<int> cross;       // pairs (i,j) of a fine and a coarse atom
     std::vector<int> clock_of;    // work: per atom 1 fine clock, 2 coarse clock, 0 neither
 
