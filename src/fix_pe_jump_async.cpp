@@ -1333,14 +1333,10 @@ int FixPEJumpAsync::maxsize_restart()
 
 void FixPEJumpAsync::write_restart(FILE *fp)
 {
-  double list[NGLOBAL] = {(scheme->started > 0) ? 1.0 : 0.0,
-                          static_cast<double>(rule->family()),
-                          static_cast<double>(rule->points()),
-                          evals_total,
-                          0.0,
-                          0.0};
+  double list[NGLOBAL] = {(scheme->started > 0) ? 1.0 : 0.0, static_cast<double>(rule->family()),
+                          static_cast<double>(rule->points()), evals_total};
+  assign->save(&list[9], &list[4]);
   clocks->save(&list[6]);
-  assign->save(&list[9]);
   if (comm->me == 0) {
     int size = sizeof(list);
     fwrite(&size, sizeof(int), 1, fp);
@@ -1380,7 +1376,7 @@ void FixPEJumpAsync::restart(char *buf)
     scheme->started = 0;
     return;
   }
-  assign->restore(&list[9]);
+  assign->restore(&list[9], &list[4]);
 }
 
 /* ----------------------------------------------------------------------

@@ -373,20 +373,24 @@ bool ClockAssignment::find_moving(const InteractionSplit &split, AsyncClocks &cl
 
 /* ---------------------------------------------------------------------- */
 
-void ClockAssignment::save(double *list) const
+void ClockAssignment::save(double *list, double *seen) const
 {
   list[0] = saved_layers;
   list[1] = saved_clock[0];
   list[2] = saved_clock[1];
+  seen[0] = fast_seen[0];
+  seen[1] = fast_seen[1];
 }
 
 /* ---------------------------------------------------------------------- */
 
-void ClockAssignment::restore(const double *list)
+void ClockAssignment::restore(const double *list, const double *seen)
 {
   saved_layers = static_cast<int>(list[0]);
   saved_clock[0] = list[1];
   saved_clock[1] = list[2];
+  fast_seen[0] = seen[0];
+  fast_seen[1] = seen[1];
 }
 
 /* ---------------------------------------------------------------------- */

@@ -77,9 +77,12 @@ namespace PEJump {
     AtomList slow_atoms;      // the atoms of the group on the coarse clock
 
     // restart: buffer layers and fine-clock atoms (number, ID hash) of
-    // the last run (3 values)
-    void save(double *list) const;
-    void restore(const double *list);
+    // the last run (3 values in list), and the fast group at the last
+    // assignment (number, ID hash: 2 values in seen), which tells whether
+    // a dynamic group changed when it is next evaluated (seen = {0, 0}
+    // from older files: the group counts as changed)
+    void save(double *list, double *seen) const;
+    void restore(const double *list, const double *seen);
 
     // communication of the clock bit of the ghosts (forward) and of flags
     // set on ghosts (reverse): the fix passes its calls on
