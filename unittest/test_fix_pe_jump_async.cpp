@@ -1254,9 +1254,9 @@ TEST(PEJumpAsync, RestartAcrossClockChangesIsExact)
 /* ----------------------------------------------------------------------
    a restart across nodes where the dynamic group is evaluated but has not
    changed: the fix takes the buffer layers anew only when the group
-   changed since its last assignment, which the restart file must tell (a
-   region that creeps: the continued run took other layers at the first
-   node after the restart, 6e-5 to 2.6e-3 off the unbroken run)
+   changed since its last assignment, which the restart file must tell
+   (without it the continued run took other layers at the first node after
+   the restart: 3.5e-3 off the unbroken run)
 ------------------------------------------------------------------------- */
 
 TEST(PEJumpAsync, RestartWithBufferAroundAStillGroupIsExact)
