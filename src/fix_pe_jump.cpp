@@ -258,7 +258,6 @@ void FixPEJump::setup(int /*vflag*/)
                      style);
   }
   scheme->fresh = 0;
-  others->refuse_shared_atoms();
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pseudo_energy_now());
   if (automatic) automatic->start_run(*nodes, opts.sample_mask);

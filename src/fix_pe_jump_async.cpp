@@ -165,13 +165,11 @@ void FixPEJumpAsync::post_constructor()
 
 FixPEJumpAsync::~FixPEJumpAsync()
 {
-  // removed inside a coarse step (unfix): whatever integrates the atoms
-  // next starts from the velocities, which must hold the fine impulses
-  // (not when LAMMPS is torn down: update and force are gone then)
-  if (update && force && modify->get_fix_by_id(id) && scheme && scheme->started && clocks &&
-      !clocks->at_coarse_node())
-    hand_over_impulses();
   if (modify->get_fix_by_id(id)) {
+    // removed inside a coarse step (unfix): whatever integrates the atoms
+    // next starts from the velocities, which must hold the fine impulses
+    // (not when LAMMPS is torn down: update and force are gone then)
+    if (update && force && !clocks->at_coarse_node()) hand_over_impulses();
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
@@ -272,18 +270,19 @@ void FixPEJumpAsync::refuse_other_fixes() const
   // at the fine and the coarse nodes at other times than theirs; fixes that
   // act in initial_integrate (fix recenter, fix tmd) take the atoms for
   // being at the step end, where neither clock leaves them
-  for (const auto &ifix : modify->get_fix_list())
+  for (const auto &ifix : modify->get_fix_list()) {
+    const bool adapts = utils::strmatch(ifix->style, "^adapt");
     if ((ifix != this) && !ifix->time_integrate &&
-        (utils::strmatch(ifix->style, "^adapt") || (ifix->setmask() & INITIAL_INTEGRATE)))
+        (adapts || (ifix->setmask() & INITIAL_INTEGRATE)))
       error->all(FLERR,
                  "Fix pe_jump/async cannot yet be combined with fix {} ({}), which {}. Use fix "
                  "pe_jump",
                  ifix->id, ifix->style,
-                 utils::strmatch(ifix->style, "^adapt")
-                     ? "changes the force field during the run: the fine and the coarse forces "
-                       "are sampled at different times"
-                     : "acts on the atoms in initial_integrate, where they are inside their "
-                       "steps on two clocks");
+                 adapts ? "changes the force field during the run: the fine and the coarse forces "
+                          "are sampled at different times"
+                        : "acts on the atoms in initial_integrate, where they are inside their "
+                          "steps on two clocks");
+  }
   // fix deform with remap v changes the velocity of an atom that crosses a
   // periodic boundary, which a slow atom cannot take inside its step
   if (domain->deform_vremap)
@@ -505,12 +504,13 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   // this fix has not seen them yet
   if (!split->up_to_date()) post_neighbor();
   first->require_fine_clock(groupbit, assign->clock_bit(), opts.buffer_layers > 0);
-  if (!split->pair_stays_in_lists())
+  const auto fit = split->pair_fit();
+  if (fit == InteractionSplit::OFF_LISTS)
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: it computes forces that are not in "
                "its neighbor lists (e.g. from partner lists of its own). Use fix pe_jump",
                force->pair_style);
-  if (!split->pair_forces_stay_on_pairs())
+  if (fit == InteractionSplit::OFF_PAIRS)
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: the force of a pair acts on other "
                "atoms than the two of the pair (e.g. on the hydrogen of a hydrogen bond, or on "
@@ -760,8 +760,8 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
 void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   catch_up_all();
-  if (with_start && !clocks->at_coarse_node()) hand_over_impulses();
   if (with_start) {
+    if (!clocks->at_coarse_node()) hand_over_impulses();
     clocks->begin_coarse();
     double **facc = state->vec(FACC);
     for (int i = 0; i < atom->nlocal; i++)
@@ -821,10 +821,7 @@ void FixPEJumpAsync::hand_over_impulses()
   for (int i = 0; i < atom->nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     const double dv = ftm2v * scheme->inverse_mass_of(i);
-    for (int k = 0; k < 3; k++) {
-      v[i][k] += dv * facc[i][k];
-      facc[i][k] = 0.0;
-    }
+    for (int k = 0; k < 3; k++) v[i][k] += dv * facc[i][k];
   }
 }
 

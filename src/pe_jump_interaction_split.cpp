@@ -22,6 +22,7 @@
 #include "utils.h"
 
 #include <algorithm>
+#include <functional>
 #include <utility>
 
 using namespace LAMMPS_NS;
@@ -240,41 +241,80 @@ void InteractionSplit::split_topology(TopoList &t)
 
 /* ---------------------------------------------------------------------- */
 
-bool InteractionSplit::pair_stays_in_lists()
+InteractionSplit::PairFit InteractionSplit::pair_fit()
 {
-  if (!force->pair || !force->pair->compute_flag || pairs.empty()) return true;
+  if (!force->pair || !force->pair->compute_flag || pairs.empty()) return FITS;
   restore();
   double **f = atom->f;
-  const int nvalues = 3 * (atom->nlocal + atom->nghost);
-  std::vector<double> fkeep(nvalues);
-  if (nvalues) {
-    std::copy(&f[0][0], &f[0][0] + nvalues, fkeep.begin());
-    std::fill(&f[0][0], &f[0][0] + nvalues, 0.0);
-  }
+  const int nall = atom->nlocal + atom->nghost;
+  std::vector<double> fkeep(3 * nall);
+  if (nall) std::copy(&f[0][0], &f[0][0] + 3 * nall, fkeep.begin());
+  // a force on an atom other than i and j (-1: none) after compute()
+  const auto compute_beyond = [&](const std::function<void()> &compute, int i, int j) {
+    if (nall) std::fill(&f[0][0], &f[0][0] + 3 * nall, 0.0);
+    compute();
+    for (int n = 0; n < nall; n++)
+      if ((n != i) && (n != j) && (f[n][0] != 0.0 || f[n][1] != 0.0 || f[n][2] != 0.0)) return true;
+    return false;
+  };
+
+  // all lists empty
   for (auto &p : pairs) {
     p.inum = p.list->inum;
     p.list->inum = 0;
   }
-  force->pair->compute(0, 0);
+  int local = compute_beyond(
+                  [&]() {
+                    force->pair->compute(0, 0);
+                  },
+                  -1, -1)
+      ? OFF_LISTS
+      : FITS;
   for (auto &p : pairs) p.list->inum = p.inum;
 
-  int local = 0;
-  for (int n = 0; n < nvalues; n++)
-    if (f[0][n] != 0.0) local = 1;
-  if (nvalues) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
+  // each list cut to one pair, evaluated by its style alone
+  for (auto &p : pairs) {
+    NeighList *list = p.list;
+    auto *style = static_cast<Pair *>(list->requestor);
+    if (local || (list->requestor_type != NeighList::PAIR) || !style) continue;
+    for (const auto &ij : probe_pairs(list)) {
+      const int i = ij.first;
+      const int n_i = list->numneigh[i];
+      int *ilist = list->ilist, *neigh_i = list->firstneigh[i];
+      int one_i = i, one_j = ij.second;
+      list->inum = 1;
+      list->ilist = &one_i;
+      list->numneigh[i] = 1;
+      list->firstneigh[i] = &one_j;
+      if (compute_beyond(
+              [&]() {
+                style->compute(0, 0);
+              },
+              i, one_j & NEIGHMASK))
+        local = OFF_PAIRS;
+      list->inum = p.inum;
+      list->ilist = ilist;
+      list->numneigh[i] = n_i;
+      list->firstneigh[i] = neigh_i;
+    }
+  }
+  if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
-  return !global;
+  return static_cast<PairFit>(global);
 }
 
-/* ---------------------------------------------------------------------- */
+/* ----------------------------------------------------------------------
+   per atom type, the closest pair of a list with an atom i of that type:
+   i and its raw neighbor entry (a style may treat types apart, e.g. TIP4P
+   its oxygen)
+------------------------------------------------------------------------- */
 
-std::vector<std::pair<int, int>> InteractionSplit::closest_pairs(const NeighList *list) const
+std::vector<std::pair<int, int>> InteractionSplit::probe_pairs(const NeighList *list) const
 {
   double **x = atom->x;
   const int *type = atom->type;
-  const int ntypes = atom->ntypes;
-  std::vector<double> best((ntypes + 1) * (ntypes + 1), -1.0);
+  std::vector<double> best(atom->ntypes + 1, -1.0);
   std::vector<std::pair<int, int>> chosen(best.size(), {-1, -1});
   for (int ii = 0; ii < list->inum; ii++) {
     const int i = list->ilist[ii];
@@ -282,10 +322,9 @@ std::vector<std::pair<int, int>> InteractionSplit::closest_pairs(const NeighList
       const int j = list->firstneigh[i][jj] & NEIGHMASK;
       double r2 = 0.0;
       for (int k = 0; k < 3; k++) r2 += (x[i][k] - x[j][k]) * (x[i][k] - x[j][k]);
-      const int t = MIN(type[i], type[j]) * (ntypes + 1) + MAX(type[i], type[j]);
-      if ((best[t] < 0.0) || (r2 < best[t])) {
-        best[t] = r2;
-        chosen[t] = {i, list->firstneigh[i][jj]};
+      if ((best[type[i]] < 0.0) || (r2 < best[type[i]])) {
+        best[type[i]] = r2;
+        chosen[type[i]] = {i, list->firstneigh[i][jj]};
       }
     }
   }
@@ -293,49 +332,6 @@ std::vector<std::pair<int, int>> InteractionSplit::closest_pairs(const NeighList
   for (const auto &ij : chosen)
     if (ij.first >= 0) found.push_back(ij);
   return found;
-}
-
-/* ---------------------------------------------------------------------- */
-
-bool InteractionSplit::pair_forces_stay_on_pairs()
-{
-  if (!force->pair || !force->pair->compute_flag || pairs.empty()) return true;
-  restore();
-  double **f = atom->f;
-  const int nall = atom->nlocal + atom->nghost;
-  std::vector<double> fkeep(3 * nall);
-  if (nall) std::copy(&f[0][0], &f[0][0] + 3 * nall, fkeep.begin());
-  int local = 0;
-  for (auto &p : pairs) {
-    NeighList *list = p.list;
-    if (list->requestor_type != NeighList::PAIR) continue;
-    auto *style = static_cast<Pair *>(list->requestor);
-    if (!style) continue;
-    // a style may treat atom types differently (TIP4P): one pair of each
-    for (const auto &ij : closest_pairs(list)) {
-      // the list cut to that pair, evaluated by its style alone
-      const int i = ij.first, j = ij.second & NEIGHMASK;
-      const int inum = list->inum, n_i = list->numneigh[i];
-      int *ilist = list->ilist, *neigh_i = list->firstneigh[i];
-      int one_i = i, one_j = ij.second;
-      list->inum = 1;
-      list->ilist = &one_i;
-      list->numneigh[i] = 1;
-      list->firstneigh[i] = &one_j;
-      if (nall) std::fill(&f[0][0], &f[0][0] + 3 * nall, 0.0);
-      style->compute(0, 0);
-      list->inum = inum;
-      list->ilist = ilist;
-      list->numneigh[i] = n_i;
-      list->firstneigh[i] = neigh_i;
-      for (int n = 0; n < nall; n++)
-        if ((n != i) && (n != j) && (f[n][0] != 0.0 || f[n][1] != 0.0 || f[n][2] != 0.0)) local = 1;
-    }
-  }
-  if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
-  int global = 0;
-  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
-  return !global;
 }
 
 /* ---------------------------------------------------------------------- */

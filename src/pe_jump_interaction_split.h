@@ -66,16 +66,15 @@ namespace PEJump {
     void restore();
     Subset active() const { return current; }
 
-    // true if the pair style computes forces only from its neighbor lists:
-    // evaluated once with empty lists, it must give no force (a style with
-    // partner lists of its own, e.g. peri, cannot be split). Collective
-    bool pair_stays_in_lists();
-    // true if each pair style puts the forces of a pair on its two atoms
-    // only: evaluated with its list cut to one pair (the closest of each
-    // pair of atom types), it must give no force on other atoms (a
-    // hydrogen bond style acts on the hydrogen, TIP4P styles on the atoms
-    // of both molecules). Collective
-    bool pair_forces_stay_on_pairs();
+    // whether the pair style can be split pair by pair (collective):
+    // evaluated once with empty lists it must give no force (OFF_LISTS: a
+    // style with partner lists of its own, e.g. peri), and evaluated with
+    // each list cut to one pair (the closest for each atom type) no force
+    // on other atoms than the two of the pair (OFF_PAIRS: a hydrogen bond
+    // style acts on the hydrogen, TIP4P styles on the atoms of both
+    // molecules)
+    enum PairFit { FITS, OFF_PAIRS, OFF_LISTS };
+    PairFit pair_fit();
 
     // fraction of all interactions that a subset holds (global)
     double fraction(Subset which) const { return frac[which]; }
@@ -124,8 +123,7 @@ namespace PEJump {
       PairSubset part[2];
     };
     std::vector<PairList> pairs;
-    // per pair of atom types, the closest pair of a list: (i, raw entry j)
-    std::vector<std::pair<int, int>> closest_pairs(const NeighList *) const;
+    std::vector<std::pair<int, int>> probe_pairs(const NeighList *) const;
     std::vector<int> cross;       // pairs (i,j) of a fine and a coarse atom
     std::vector<int> clock_of;    // work: per atom 1 fine clock, 2 coarse clock, 0 neither
 

@@ -68,7 +68,7 @@ namespace PEJump {
                          bool only_end_nodes) const;
 
     // an error if atoms of this fix are integrated by another fix too
-    // (collective; at setup)
+    // (collective; at init)
     void refuse_shared_atoms() const;
 
     static bool replaces_forces(const Fix *);

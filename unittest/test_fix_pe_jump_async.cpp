@@ -1431,7 +1431,7 @@ TEST(PEJumpAsync, StepChangesInsideCoarseStepsKeepThePseudoEnergy)
    pair styles whose pair forces act on other atoms than the two of the
    pair (TIP4P: the M site of an oxygen is made of its hydrogens; hydrogen
    bonds: the hydrogen) cannot be split by pair: checked by evaluating
-   each style on its closest pair alone. Without the check the total
+   each style on one pair for each atom type. Without the check the total
    momentum of 128 flexible TIP4P waters drifted by 0.14 in 200 steps
    (the same waters with lj/cut/coul/cut: constant)
 ------------------------------------------------------------------------- */
