@@ -242,7 +242,9 @@ void FixPEJump::setup(int /*vflag*/)
   evals_step = 0.0;
   // a new time step between runs: the jumps fit the old one (restart), unless
   // they are to be carried over (compensate given, or adapt)
-  scheme->agree_on_started(group_atoms(), style, (opts.compensate < 0) && !steps->adapts());
+  scheme->agree_on_started(group_atoms(), style, (opts.compensate < 0) && !steps->adapts(),
+                           nodes->tallied(true));
+  nodes->ask_energy_at(update->laststep);    // for the next run to compare
   if (!scheme->started) {
     start_scheme(nullptr, true);
   } else {
@@ -677,7 +679,7 @@ void FixPEJump::tally_at_node()
 void FixPEJump::post_run()
 {
   // the velocities as the run leaves them, for the next run to compare
-  scheme->end_run(group_atoms());
+  scheme->end_run(group_atoms(), nodes->tallied(true));
 
   if (automatic) automatic->report(style);
 }

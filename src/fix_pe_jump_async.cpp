@@ -495,7 +495,13 @@ void FixPEJumpAsync::min_setup(int /*vflag*/)
 
 void FixPEJumpAsync::setup(int /*vflag*/)
 {
-  scheme->agree_on_started(group_atoms(), style, opts.compensate < 0);
+  // (mid coarse step the positions belong to different times)
+  scheme->agree_on_started(group_atoms(), style, opts.compensate < 0,
+                           nodes->tallied(clocks->at_coarse_node()));
+  // the next run compares the energy of the last coarse node, if the run ends at one
+  if ((clocks->steps() > 0) &&
+      ((update->laststep - update->ntimestep + clocks->done()) % clocks->steps() == 0))
+    nodes->ask_energy_at(update->laststep);
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
@@ -1445,7 +1451,7 @@ void FixPEJumpAsync::post_run()
     if (watch(OtherFixes::BETWEEN_STEPS)) note_velocity_changes(nullptr);
     refuse_velocity_changes();
   }
-  scheme->end_run(group_atoms());
+  scheme->end_run(group_atoms(), nodes->tallied(clocks->at_coarse_node()));
   assign->report(style);
 }
 

@@ -29,6 +29,7 @@
 #include "timer.h"
 #include "utils.h"
 
+#include <cmath>
 #include <cstring>
 
 // with the OPENMP package, /omp styles leave the forces of the threads
@@ -203,19 +204,30 @@ void ForceSampler::project()
 
 /* ---------------------------------------------------------------------- */
 
-double ForceSampler::energy(int mask) const
+double ForceSampler::energy(int mask, double *magnitude) const
 {
   mask &= present();
-  double one = 0.0;
-  if (mask & PAIR) one += force->pair->eng_vdwl + force->pair->eng_coul;
-  if (mask & BOND) one += force->bond->energy;
-  if (mask & ANGLE) one += force->angle->energy;
-  if (mask & DIHEDRAL) one += force->dihedral->energy;
-  if (mask & IMPROPER) one += force->improper->energy;
-  double all = 0.0;
-  MPI_Allreduce(&one, &all, 1, MPI_DOUBLE, MPI_SUM, world);
-  if (mask & KSPACE) all += force->kspace->energy;    // already summed over ranks
-  return all;
+  double part[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  if (mask & PAIR) {
+    part[0] = force->pair->eng_vdwl;
+    part[1] = force->pair->eng_coul;
+  }
+  if (mask & BOND) part[2] = force->bond->energy;
+  if (mask & ANGLE) part[3] = force->angle->energy;
+  if (mask & DIHEDRAL) part[4] = force->dihedral->energy;
+  if (mask & IMPROPER) part[5] = force->improper->energy;
+  double one[2] = {0.0, 0.0}, all[2];
+  for (const double e : part) {
+    one[0] += e;
+    one[1] += std::fabs(e);
+  }
+  MPI_Allreduce(one, all, 2, MPI_DOUBLE, MPI_SUM, world);
+  if (mask & KSPACE) {    // already summed over ranks
+    all[0] += force->kspace->energy;
+    all[1] += std::fabs(force->kspace->energy);
+  }
+  if (magnitude) *magnitude = all[1];
+  return all[0];
 }
 
 /* ---------------------------------------------------------------------- */

@@ -70,8 +70,9 @@ namespace PEJump {
     void project();    // the projections on atom->f of the owned atoms
 
     // potential energy of the contributions in mask as tallied by their last
-    // computation with energy flags (collective call)
-    double energy(int mask) const;
+    // computation with energy flags (collective call); magnitude (if given)
+    // gets the sum of the absolute values of the parts
+    double energy(int mask, double *magnitude = nullptr) const;
 
     // fraction of the system's interactions (neighbor pairs, bonds, angles,
     // dihedrals, impropers) that the contributions in mask represent;

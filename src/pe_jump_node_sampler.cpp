@@ -15,9 +15,11 @@
 
 #include "atom.h"
 #include "comm.h"
+#include "compute.h"
 #include "error.h"
 #include "force.h"
 #include "memory.h"
+#include "modify.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_quadrature.h"
 #include "update.h"
@@ -160,6 +162,23 @@ double NodeSampler::potential(int mask)
   Keep keep(*this);
   sampler->compute(mask, ENERGY_GLOBAL, 0);
   return sampler->energy(mask);
+}
+
+/* ---------------------------------------------------------------------- */
+
+NodeSampler::Tallied NodeSampler::tallied(bool at_positions) const
+{
+  Tallied now = {at_positions && (update->eflag_global == update->ntimestep), 0.0, 0.0};
+  if (now.known) now.energy = sampler->energy(ForceSampler::ALL, &now.magnitude);
+  return now;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void NodeSampler::ask_energy_at(bigint step) const
+{
+  Compute *pe = modify->get_compute_by_id("thermo_pe");
+  if (pe) pe->addstep(step);
 }
 
 /* ---------------------------------------------------------------------- */

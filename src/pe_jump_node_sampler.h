@@ -124,6 +124,18 @@ namespace PEJump {
     // positions (one evaluation; the forces are kept)
     double potential(int mask);
 
+    // the potential energy of the whole force field as the last evaluation
+    // of this time step tallied it (known: that evaluation tallied energy
+    // and was at the current positions, at_positions), and the sum of the
+    // absolute values of its parts (collective call)
+    struct Tallied {
+      bool known;
+      double energy, magnitude;
+    };
+    Tallied tallied(bool at_positions) const;
+    // asks LAMMPS to tally the energy in the MD step of step (thermo's pe)
+    void ask_energy_at(bigint step) const;
+
     ForceSampler *forces() const { return sampler; }
     double memory_usage() const;
 

@@ -30,9 +30,10 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
-    Pointers(lmp), started(0), fresh(0), state(table),
-    cached_step(-1), cached{0.0, 0.0}, at_end{-1, {0.0, 0.0, 0.0}, 0.0, 0.0, 0.0}, minimized(false)
+    Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}, at_end(),
+    minimized(false)
 {
+  at_end.atoms = -1;    // no run yet
   JUMP = state.add("jump", 3, 0.0);
   VSIG = state.add("vsig", 1, 0.0);
   FSTART = start_nodes ? state.add("fstart", 3, std::nan("")) : -1;
@@ -96,7 +97,8 @@ double TwoStep::inverse_mass_of(int i) const
    that own atoms: every rank must take the same decision
 ------------------------------------------------------------------------- */
 
-void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_step_restarts)
+void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_step_restarts,
+                               const NodeSampler::Tallied &now)
 {
   int all_started = 0;
   MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
@@ -106,7 +108,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
                    "(written with other settings or by another version): the two-step scheme "
                    "restarts from the current state\n",
                    style);
-  const std::string why = changed_since_run(census(set), new_step_restarts);
+  const std::string why = changed_since_run(census(set, now), new_step_restarts);
   if ((all_started > 0) && !why.empty()) {
     all_started = 0;
     if (comm->me == 0)
@@ -252,15 +254,15 @@ void TwoStep::mark_all(const AtomSet &set) const
 
 /* ---------------------------------------------------------------------- */
 
-void TwoStep::end_run(const AtomSet &set)
+void TwoStep::end_run(const AtomSet &set, const NodeSampler::Tallied &energy)
 {
   mark_all(set);
-  at_end = census(set);
+  at_end = census(set, energy);
 }
 
 /* ---------------------------------------------------------------------- */
 
-TwoStep::Census TwoStep::census(const AtomSet &set) const
+TwoStep::Census TwoStep::census(const AtomSet &set, const NodeSampler::Tallied &energy) const
 {
   double local[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, global[6];
   double **x = atom->x;
@@ -283,7 +285,8 @@ TwoStep::Census TwoStep::census(const AtomSet &set) const
           {global[0], global[1], global[2]},
           global[3],
           global[4],
-          update->dt};
+          update->dt,
+          energy};
 }
 
 /* ----------------------------------------------------------------------
@@ -307,6 +310,15 @@ std::string TwoStep::changed_since_run(const Census &now, bool new_step_restarts
              "set, change_box with remap, reset_atoms id, ...)";
   if (std::fabs(now.mass - at_end.mass) > 1e-12 * std::max(now.mass, at_end.mass))
     return "the masses of atoms of the group changed since the last run";
+  // the same energy summed in another order (new lists) differs by round-off
+  const auto &e0 = at_end.energy, &e1 = now.energy;
+  if (e0.known && e1.known &&
+      (std::fabs(e1.energy - e0.energy) > 1e-10 * std::max(e0.magnitude, e1.magnitude)))
+    return fmt::format("the potential energy at the current positions changed since the last run "
+                       "(from {} to {}: pair_style, pair_coeff, bond_coeff, special_bonds, "
+                       "kspace_style, set type or charge, a box changed without moving the atoms, "
+                       "...)",
+                       e0.energy, e1.energy);
   if (new_step_restarts && (now.dt != at_end.dt))
     return fmt::format("the time step changed since the last run (from {} to {}; give "
                        "compensate no (or yes) to carry the jumps over instead)",

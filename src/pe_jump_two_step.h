@@ -53,16 +53,20 @@ namespace PEJump {
     // -1, is told; so are atoms of the group deleted since the last run,
     // whose partners' jumps hold forces that are gone, atoms that joined
     // it, which have no jump, atoms moved by an energy minimization or a
-    // command, whose jumps belong to the old positions, and new masses or
-    // a new time step, which the jumps do not fit: not started);
+    // command, whose jumps belong to the old positions, new masses or a new
+    // time step, which the jumps do not fit, and a potential energy at the
+    // positions of the last run's end that is not what it was then (a new
+    // force field, a box changed), which they do not fit either: not
+    // started; now: the energy tallied at setup);
     // non-finite velocities are refused
     // new_step_restarts: a time step changed since the last run restarts
     // the scheme too (unless the jumps are to be carried over)
-    void agree_on_started(const AtomSet &, const char *style, bool new_step_restarts);
+    void agree_on_started(const AtomSet &, const char *style, bool new_step_restarts,
+                          const NodeSampler::Tallied &now);
     // the end of a run: the fingerprints of the velocities and the census
-    // of the group (atoms, positions, masses, time step), for the next run
-    // to compare
-    void end_run(const AtomSet &);
+    // of the group (atoms, positions, masses, time step, the potential
+    // energy tallied at the end), for the next run to compare
+    void end_run(const AtomSet &, const NodeSampler::Tallied &energy);
     // an energy minimization moves the atoms (Fix::min_setup()): the state
     // belongs to the old positions, the next run restarts the scheme
     void atoms_minimized() { minimized = true; }
@@ -142,10 +146,11 @@ namespace PEJump {
       double scale;
       double mass;    // sum_i w_i m_i
       double dt;      // the time step
+      NodeSampler::Tallied energy;
     };
-    Census census(const AtomSet &) const;    // global
-    Census at_end;                           // at the end of the last run (atoms -1: none)
-    bool minimized;                          // an energy minimization since the last run
+    Census census(const AtomSet &, const NodeSampler::Tallied &) const;    // global
+    Census at_end;     // at the end of the last run (atoms -1: none)
+    bool minimized;    // an energy minimization since the last run
     std::string changed_since_run(const Census &now, bool new_step_restarts) const;
   };
 

@@ -653,7 +653,11 @@ double continued_against_redefined(const std::string &fix, const std::vector<std
     s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
             "fix 1 all " + fix, "timestep 0.002", "thermo 0"});
     s.cmds(before);
-    s.cmd(change);
+    // a change of several commands is written with ';' between them
+    for (std::size_t at = 0, end = 0; at < change.size(); at = end + 1) {
+      end = std::min(change.find(';', at), change.size());
+      s.cmd(change.substr(at, end - at));
+    }
     if (redefine) s.cmds({"unfix 1", "fix 1 all " + fix});
     ::testing::internal::CaptureStdout();
     s.cmd("run 20 post no");
@@ -682,6 +686,49 @@ TEST(PEJump, MinimizationBetweenRunsRestartsTheScheme)
                                           "energy minimization since the last run"),
               1e-12)
         << fix;
+}
+
+/* ----------------------------------------------------------------------
+   a new force field between runs (pair_coeff, pair_style, a box changed
+   without moving the atoms, ...): the jumps hold h F/m of the old forces
+   and would leave an alternating jump of h (F' - F)/m (LJ liquid, epsilon
+   1 -> 1.5 after 500 steps: etotal alternating by 5.2e-3 from step to
+   step, fix nve spreads by 1.1e-3). The potential energy at the positions
+   the last run ended at tells it: the scheme restarts (log message), as a
+   fix defined anew; also when the thermo output does not ask for the
+   energy, and not when nothing changed
+------------------------------------------------------------------------- */
+
+TEST(PEJump, NewForceFieldBetweenRunsRestartsTheScheme)
+{
+  const std::string why =
+      "the potential energy at the current positions changed since the last run";
+  for (const std::string fix :
+       {"pe_jump", "pe_jump quadrature lobatto 2", "pe_jump quadrature lobatto 3",
+        "pe_jump quadrature legendre 2", "pe_jump/async 5 fast",
+        "pe_jump/async 5 fast quadrature lobatto 3"}) {
+    for (const std::string change :
+         {"pair_coeff 1 1 1.5 1.0 2.5", "pair_style soft 1.0;pair_coeff 1 1 20.0",
+          "pair_style lj/cut 2.2;pair_coeff 1 1 1.0 1.0 2.2"})
+      EXPECT_LT(continued_against_redefined(fix, {"run 50 post no"}, change, why), 1e-12)
+          << fix << ", " << change;
+    // no energy in the thermo output: the fix asks for it at the run's last step
+    EXPECT_LT(continued_against_redefined(fix, {"thermo_style custom step temp", "run 50 post no"},
+                                          "pair_coeff 1 1 1.5 1.0 2.5", why),
+              1e-12)
+        << fix;
+    // nothing changed (and new neighbor lists sum the energy in another order)
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s);
+    s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
+            "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 50 post no",
+            "pair_coeff 1 1 1.0 1.0 2.5", "atom_modify sort 1 1.0", "run 0 post no",
+            "atom_modify sort 1000 0.0"});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 20 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    EXPECT_THAT(out, ::testing::Not(ContainsRegex("restarts"))) << fix;
+  }
 }
 
 /* ----------------------------------------------------------------------
