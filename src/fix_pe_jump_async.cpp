@@ -119,6 +119,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   peratom_freq = 1;
   restart_global = 1;
   restart_peratom = 1;
+  wd_header = 1;    // to refuse write_data inside a coarse step (writes nothing)
   create_attribute = 1;
   comm_forward = 1;
   comm_reverse = 1;
@@ -553,6 +554,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
 void FixPEJumpAsync::continue_scheme()
 {
   const int change = scheme->velocity_change(group_atoms(), clocks->at_coarse_node());
+  if ((change == 2) && !clocks->at_coarse_node()) refuse_slow_velocity_changes();
   if (change == 2)
     start_scheme("velocities were changed since the last run: restarting the two-step scheme "
                  "from the current positions and velocities",
@@ -560,6 +562,44 @@ void FixPEJumpAsync::continue_scheme()
   if ((change == 1) && (comm->me == 0))
     utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
                    style);
+}
+
+/* ----------------------------------------------------------------------
+   inside a coarse step atom->v of a slow atom is its velocity at the
+   coarse step's start, without the impulses of its fine interactions
+   since (in facc): a command that set velocities acted on those
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::refuse_slow_velocity_changes()
+{
+  const int local = scheme->any_changed({0, &assign->slow_atoms}) ? 1 : 0;
+  int any = 0;
+  MPI_Allreduce(&local, &any, 1, MPI_INT, MPI_MAX, world);
+  if (any)
+    error->all(FLERR,
+               "Fix {}: velocities of slow atoms were changed since the last run, which ended "
+               "inside a coarse step ({} of {} fine steps done): there a slow atom's velocity is "
+               "that of the coarse step's start, without the impulses since. End the run at a "
+               "coarse node (a multiple of K steps) before changing velocities, or unfix the "
+               "fix first",
+               style, clocks->done(), clocks->steps());
+}
+
+/* ----------------------------------------------------------------------
+   write_data inside a coarse step would write the slow atoms' velocities
+   of the coarse step's start, without the impulses since, and positions
+   that may lag (called on rank 0 only, by write_data only)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::write_data_header(FILE *, int)
+{
+  if (scheme->started && !clocks->at_coarse_node())
+    error->one(FLERR,
+               "Fix {}: write_data inside a coarse step ({} of {} fine steps done) would write "
+               "the slow atoms' velocities of the coarse step's start and positions of other "
+               "times: end the run at a coarse node (a multiple of K steps), or use "
+               "write_restart, which keeps the state of the fix",
+               style, clocks->done(), clocks->steps());
 }
 
 /* ---------------------------------------------------------------------- */

@@ -72,6 +72,7 @@ class FixPEJumpAsync : public Fix {
   int pack_exchange(int, double *) override;
   int unpack_exchange(int, double *) override;
   void write_restart(FILE *) override;
+  void write_data_header(FILE *, int) override;
   void restart(char *) override;
   int pack_restart(int, double *) override;
   void unpack_restart(int, int) override;
@@ -134,6 +135,7 @@ class FixPEJumpAsync : public Fix {
   void store_start_node();      // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
   void hand_over_impulses();    // inside a coarse step: the slow atoms get their fine impulses
   void continue_scheme();
+  void refuse_slow_velocity_changes();    // inside a coarse step (at setup)
   void node_impulses();
   void note_velocity_changes(const AtomList *);
   void refuse_velocity_changes();    // an error if another fix changed a velocity
