@@ -31,6 +31,7 @@
 #include "bond.h"
 #include "comm.h"
 #include "domain.h"
+#include "dump.h"
 #include "error.h"
 #include "force.h"
 #include "group.h"
@@ -542,6 +543,36 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
   classes->label(*split, *assign, groupbit);
+  warn_output_between_nodes();
+}
+
+/* ----------------------------------------------------------------------
+   thermo output or dumps on steps that are not coarse nodes show the slow
+   atoms' velocities of the coarse step's start (first order in the
+   coarse step): a warning, once per run
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::warn_output_between_nodes() const
+{
+  const bigint k = clocks->steps();
+  if ((comm->me != 0) || (k <= 1)) return;
+  const bool aligned = ((update->ntimestep - clocks->done()) % k) == 0;
+  const auto off_nodes = [&](int every, bool variable) {
+    return variable || ((every > 0) && (!aligned || (every % k != 0)));
+  };
+  std::string what;
+  if (off_nodes(output->thermo_every, output->var_thermo != nullptr)) what = "thermo output";
+  for (int i = 0; i < output->ndump; i++)
+    if (off_nodes(output->every_dump[i], output->every_dump[i] == 0)) {
+      what += what.empty() ? "dump " : ", dump ";
+      what += output->dump[i]->id;
+    }
+  if (!what.empty())
+    error->warning(FLERR,
+                   "Fix {}: {} on steps that are not coarse nodes (every {} steps from step {}): "
+                   "there the slow atoms' velocities (ke, temp, press, dumped velocities, computes "
+                   "that use them) are those of the coarse step's start",
+                   style, what, k, update->ntimestep - clocks->done() + (clocks->done() ? k : 0));
 }
 
 /* ----------------------------------------------------------------------

@@ -136,6 +136,7 @@ class FixPEJumpAsync : public Fix {
   void hand_over_impulses();    // inside a coarse step: the slow atoms get their fine impulses
   void continue_scheme();
   void refuse_slow_velocity_changes();    // inside a coarse step (at setup)
+  void warn_output_between_nodes() const;
   void node_impulses();
   void note_velocity_changes(const AtomList *);
   void refuse_velocity_changes();    // an error if another fix changed a velocity
