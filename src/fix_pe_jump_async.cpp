@@ -525,6 +525,12 @@ void FixPEJumpAsync::setup(int /*vflag*/)
                "the atoms of TIP4P molecules), which the split cannot put on their clocks. Use "
                "fix pe_jump",
                force->pair_style);
+  if (fit == InteractionSplit::ON_TIME)
+    error->all(FLERR,
+               "Fix pe_jump/async cannot take pair style {}: its forces depend on the time or the "
+               "step (e.g. pair_style hybrid/scaled with a variable of time), which the fine and "
+               "coarse nodes would see at the end of the step (first order). Use fix pe_jump",
+               force->pair_style);
   // start nodes of slow atoms inside a coarse step cannot be taken again:
   // new atoms take theirs at their first evaluation
   scheme->fresh = 0;

@@ -19,6 +19,7 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "update.h"
 #include "utils.h"
 
 #include <algorithm>
@@ -298,10 +299,67 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
       list->firstneigh[i] = neigh_i;
     }
   }
+  if (!local && depends_on_time()) local = ON_TIME;
   if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   return static_cast<PairFit>(global);
+}
+
+/* ----------------------------------------------------------------------
+   the forces of the pair style with every list cut to one pair, at this
+   step and 7 steps later (the time moves with the step): different if a
+   variable of the time or the step scales them
+------------------------------------------------------------------------- */
+
+bool InteractionSplit::depends_on_time()
+{
+  struct Cut {
+    NeighList *list;
+    int inum, i, n_i;
+    int *ilist, *neigh_i;
+  };
+  std::vector<Cut> cuts;
+  std::vector<std::pair<int, int>> one;    // the pair of each cut list (i, raw j)
+  one.reserve(pairs.size());
+  for (auto &p : pairs) {
+    NeighList *list = p.list;
+    Cut c = {list, list->inum, -1, 0, list->ilist, nullptr};
+    const auto probes = probe_pairs(list);
+    list->inum = 0;
+    for (const auto &ij : probes)
+      if (ij.first >= 0) {
+        one.push_back(ij);
+        c.i = ij.first;
+        c.n_i = list->numneigh[c.i];
+        c.neigh_i = list->firstneigh[c.i];
+        list->inum = 1;
+        list->ilist = &one.back().first;
+        list->numneigh[c.i] = 1;
+        list->firstneigh[c.i] = &one.back().second;
+        break;
+      }
+    cuts.push_back(c);
+  }
+  double **f = atom->f;
+  const int n = 3 * (atom->nlocal + atom->nghost);
+  const auto forces = [&]() {
+    if (n) std::fill(&f[0][0], &f[0][0] + n, 0.0);
+    force->pair->compute(0, 0);
+    return n ? std::vector<double>(&f[0][0], &f[0][0] + n) : std::vector<double>();
+  };
+  const std::vector<double> now = forces();
+  update->ntimestep += 7;
+  const std::vector<double> later = forces();
+  update->ntimestep -= 7;
+  for (auto c = cuts.rbegin(); c != cuts.rend(); ++c) {
+    c->list->inum = c->inum;
+    c->list->ilist = c->ilist;
+    if (c->i < 0) continue;
+    c->list->numneigh[c->i] = c->n_i;
+    c->list->firstneigh[c->i] = c->neigh_i;
+  }
+  return now != later;
 }
 
 /* ----------------------------------------------------------------------

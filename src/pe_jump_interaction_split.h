@@ -72,8 +72,10 @@ namespace PEJump {
     // each list cut to one pair (the closest for each atom type) no force
     // on other atoms than the two of the pair (OFF_PAIRS: a hydrogen bond
     // style acts on the hydrogen, TIP4P styles on the atoms of both
-    // molecules)
-    enum PairFit { FITS, OFF_PAIRS, OFF_LISTS };
+    // molecules), and with every list cut to one pair the same forces at
+    // another step (ON_TIME: hybrid/scaled with a variable of time or
+    // step, which the fine and coarse nodes would see at the step end)
+    enum PairFit { FITS, OFF_PAIRS, OFF_LISTS, ON_TIME };
     PairFit pair_fit();
 
     // fraction of all interactions that a subset holds (global)
@@ -124,6 +126,7 @@ namespace PEJump {
     };
     std::vector<PairList> pairs;
     std::vector<std::pair<int, int>> probe_pairs(const NeighList *) const;
+    bool depends_on_time();       // pair_fit(): the pair style, on one pair per list
     std::vector<int> cross;       // pairs (i,j) of a fine and a coarse atom
     std::vector<int> clock_of;    // work: per atom 1 fine clock, 2 coarse clock, 0 neither
 

@@ -1489,6 +1489,40 @@ TEST(PEJumpAsync, PairForcesOnOtherAtomsAreRefused)
 }
 
 /* ----------------------------------------------------------------------
+   a pair style whose forces depend on the time or the step (pair_style
+   hybrid/scaled with a variable of time) was taken at the step end at
+   every node: first order (two LJ atoms, K = 1, every atom fast: error
+   ratio 2.1 per halving of the step, 46 times fix pe_jump's error at the
+   smallest step). Refused; a constant scale runs
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, PairStyleThatDependsOnTimeIsRefused)
+{
+  const auto liquid = [](const std::string &scale) {
+    return std::vector<std::string>{"units lj",
+                                    "atom_style atomic",
+                                    "lattice fcc 0.8442",
+                                    "region box block 0 3 0 3 0 3",
+                                    "create_box 1 box",
+                                    "create_atoms 1 box",
+                                    "mass 1 1.0",
+                                    "velocity all create 1.0 4711 loop geom",
+                                    "variable s equal 1.0+0.5*sin(20*time)",
+                                    "variable r equal ramp(1.0,2.0)",
+                                    "pair_style hybrid/scaled " + scale + " lj/cut 2.5",
+                                    "pair_coeff 1 1 lj/cut 1.0 1.0",
+                                    "group fast id 1:20",
+                                    "fix 1 all pe_jump/async 4 fast",
+                                    "timestep 0.002",
+                                    "thermo 0",
+                                    "run 8 post no"};
+  };
+  for (const std::string scale : {"v_s", "v_r"})
+    EXPECT_THAT(error_of(liquid(scale)), ContainsRegex("forces depend on the time")) << scale;
+  EXPECT_EQ(error_of(liquid("0.8")), "no error");
+}
+
+/* ----------------------------------------------------------------------
    inside a coarse step atom->v of a slow atom is its velocity at the
    coarse step's start, without the fine impulses since (held by the fix),
    and its position may lag: a velocity command there acted on those
