@@ -561,7 +561,9 @@ void FixPEJumpAsync::setup(int /*vflag*/)
 void FixPEJumpAsync::warn_output_between_nodes() const
 {
   const bigint k = clocks->steps();
-  if ((comm->me != 0) || (k <= 1)) return;
+  bigint slow = assign->slow_atoms.size(), all_slow = 0;    // (all on the fine clock: no warning)
+  MPI_Allreduce(&slow, &all_slow, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  if ((comm->me != 0) || (k <= 1) || (all_slow == 0)) return;
   const bool aligned = ((update->ntimestep - clocks->done()) % k) == 0;
   const auto off_nodes = [&](int every, bool variable) {
     return variable || ((every > 0) && (!aligned || (every % k != 0)));

@@ -23,6 +23,7 @@
 #include "utils.h"
 
 #include <algorithm>
+#include <cstring>
 #include <functional>
 #include <utility>
 
@@ -359,7 +360,8 @@ bool InteractionSplit::depends_on_time()
     c->list->numneigh[c->i] = c->n_i;
     c->list->firstneigh[c->i] = c->neigh_i;
   }
-  return now != later;
+  // bit for bit (NaN from atoms on top of each other compares unequal)
+  return (n > 0) && (std::memcmp(now.data(), later.data(), n * sizeof(double)) != 0);
 }
 
 /* ----------------------------------------------------------------------

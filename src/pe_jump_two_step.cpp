@@ -132,6 +132,19 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
     error->all(FLERR,
                "Fix {}: {} atoms have velocities that are not finite at the start of the run",
                style, all_bad);
+  // forces that are not finite (atoms on top of each other) would make
+  // the jumps so, and the first step's checks would blame the time step
+  double **f = atom->f;
+  bad = 0;
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    if (!(std::isfinite(f[i][0]) && std::isfinite(f[i][1]) && std::isfinite(f[i][2]))) ++bad;
+  });
+  MPI_Allreduce(&bad, &all_bad, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (all_bad)
+    error->all(FLERR,
+               "Fix {}: {} atoms have forces that are not finite at the start of the run (atoms "
+               "on top of each other, or a force field that diverges where they are)",
+               style, all_bad);
   started = (all_started > 0) ? 1 : 0;
 }
 

@@ -1489,6 +1489,30 @@ TEST(PEJumpAsync, PairForcesOnOtherAtomsAreRefused)
 }
 
 /* ----------------------------------------------------------------------
+   thermo output between coarse nodes shows the slow atoms' velocities of
+   the coarse step's start: a warning, aligned output none, and none when
+   every atom is on the fine clock
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, OutputBetweenCoarseNodesWarnsOnlyWithSlowAtoms)
+{
+  for (const std::string fast : {"id 1:20", "id 1:256"})
+    for (const int every : {3, 10}) {
+      Sim s(MPI_COMM_WORLD, false);
+      lj_liquid(s);
+      s.cmds({"group fast " + fast, "fix 1 all pe_jump/async 5 fast",
+              "thermo " + std::to_string(every)});
+      ::testing::internal::CaptureStdout();
+      s.cmd("run 20 post no");
+      const std::string out = ::testing::internal::GetCapturedStdout();
+      const bool warns = (every == 3) && (fast == "id 1:20");
+      EXPECT_EQ(std::regex_search(out, std::regex("thermo output on steps that are not coarse")),
+                warns)
+          << fast << ", thermo " << every;
+    }
+}
+
+/* ----------------------------------------------------------------------
    a pair style whose forces depend on the time or the step (pair_style
    hybrid/scaled with a variable of time) was taken at the step end at
    every node: first order (two LJ atoms, K = 1, every atom fast: error
