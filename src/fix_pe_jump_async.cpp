@@ -697,6 +697,10 @@ void FixPEJumpAsync::change_clocks()
     grow_work();
     evals_total += fine_forces_at_node(work->get(COARSE), nullptr);
   }
+  // the buffer layers are the partners within the cutoff at the node: the
+  // ghost atoms must be there too (without energy output at the node they
+  // are still where the last primary node left them)
+  if (due && (opts.buffer_layers > 0) && !by_subsets) comm->forward_comm();
   const bool changed = due && assign->follow(*split, to_fine, picked);
   if (due || !split->up_to_date()) {
     split->build();
