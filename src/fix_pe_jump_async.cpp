@@ -35,6 +35,7 @@
 #include "error.h"
 #include "force.h"
 #include "group.h"
+#include "input.h"
 #include "modify.h"
 #include "neighbor.h"
 #include "output.h"
@@ -120,7 +121,6 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   peratom_freq = 1;
   restart_global = 1;
   restart_peratom = 1;
-  wd_header = 1;    // to refuse write_data inside a coarse step (writes nothing)
   create_attribute = 1;
   comm_forward = 1;
   comm_reverse = 1;
@@ -219,6 +219,8 @@ void FixPEJumpAsync::init()
   assign->find_groups();
   split->set_fine_bit(assign->clock_bit());
   maxexchange = state->values();
+  // write_data initializes the system first (also with nofix)
+  if (input->command && (strcmp(input->command, "write_data") == 0)) refuse_data_file();
 }
 
 /* ----------------------------------------------------------------------
@@ -561,9 +563,8 @@ void FixPEJumpAsync::setup(int /*vflag*/)
 void FixPEJumpAsync::warn_output_between_nodes() const
 {
   const bigint k = clocks->steps();
-  bigint slow = assign->slow_atoms.size(), all_slow = 0;    // (all on the fine clock: no warning)
-  MPI_Allreduce(&slow, &all_slow, 1, MPI_LMP_BIGINT, MPI_SUM, world);
-  if ((comm->me != 0) || (k <= 1) || (all_slow == 0)) return;
+  const bigint slow = slow_total();    // (all on the fine clock: no warning)
+  if ((comm->me != 0) || (k <= 1) || (slow == 0)) return;
   const bool aligned = ((update->ntimestep - clocks->done()) % k) == 0;
   const auto off_nodes = [&](int every, bool variable) {
     return variable || ((every > 0) && (!aligned || (every % k != 0)));
@@ -603,6 +604,21 @@ void FixPEJumpAsync::continue_scheme()
                    style);
 }
 
+/* ---------------------------------------------------------------------- */
+
+bigint FixPEJumpAsync::slow_total() const
+{
+  // atoms of the group off the fine clock (from the masks: also before
+  // the first list build, e.g. after read_restart)
+  const int *mask = atom->mask;
+  const int clock = assign->clock_bit();
+  bigint local = 0, all = 0;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & groupbit) && !(mask[i] & clock)) ++local;
+  MPI_Allreduce(&local, &all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  return all;
+}
+
 /* ----------------------------------------------------------------------
    inside a coarse step atom->v of a slow atom is its velocity at the
    coarse step's start, without the impulses of its fine interactions
@@ -627,13 +643,13 @@ void FixPEJumpAsync::refuse_slow_velocity_changes()
 /* ----------------------------------------------------------------------
    write_data inside a coarse step would write the slow atoms' velocities
    of the coarse step's start, without the impulses since, and positions
-   that may lag (called on rank 0 only, by write_data only)
+   that may lag (none of this with every atom on the fine clock)
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::write_data_header(FILE *, int)
+void FixPEJumpAsync::refuse_data_file() const
 {
-  if (scheme->started && !clocks->at_coarse_node())
-    error->one(FLERR,
+  if (scheme->started && !clocks->at_coarse_node() && (slow_total() > 0))
+    error->all(FLERR,
                "Fix {}: write_data inside a coarse step ({} of {} fine steps done) would write "
                "the slow atoms' velocities of the coarse step's start and positions of other "
                "times: end the run at a coarse node (a multiple of K steps), or use "

@@ -72,7 +72,6 @@ class FixPEJumpAsync : public Fix {
   int pack_exchange(int, double *) override;
   int unpack_exchange(int, double *) override;
   void write_restart(FILE *) override;
-  void write_data_header(FILE *, int) override;
   void restart(char *) override;
   int pack_restart(int, double *) override;
   void unpack_restart(int, int) override;
@@ -137,6 +136,8 @@ class FixPEJumpAsync : public Fix {
   void continue_scheme();
   void refuse_slow_velocity_changes();    // inside a coarse step (at setup)
   void warn_output_between_nodes() const;
+  void refuse_data_file() const;    // write_data inside a coarse step (at init)
+  bigint slow_total() const;        // atoms on the coarse clock (global)
   void node_impulses();
   void note_velocity_changes(const AtomList *);
   void refuse_velocity_changes();    // an error if another fix changed a velocity

@@ -1580,7 +1580,8 @@ TEST(PEJumpAsync, VelocitiesAndDataFilesInsideACoarseStepAreRefused)
   };
   for (const std::string cmd :
        {"velocity all set 0 0 0", "velocity all scale 1.5", "velocity all zero linear",
-        "velocity all create 1.0 4711 loop geom", "write_data pe_jump_async_midstep.data"}) {
+        "velocity all create 1.0 4711 loop geom", "write_data pe_jump_async_midstep.data",
+        "write_data pe_jump_async_midstep.data nofix"}) {
     std::vector<std::string> inside = base(73);    // 3 of 5 fine steps done
     inside.push_back(cmd);
     if (cmd[0] == 'v') inside.push_back("run 0 post no");
@@ -1604,6 +1605,12 @@ TEST(PEJumpAsync, VelocitiesAndDataFilesInsideACoarseStepAreRefused)
   fine.push_back("velocity fast set 0 0 0");
   fine.push_back("run 2 post no");
   EXPECT_EQ(error_of(fine), "no error");
+  // every atom on the fine clock: at a fine node, nothing to refuse
+  std::vector<std::string> all_fast = base(73);
+  all_fast[all_fast.size() - 5] = "group fast id 1:256";
+  all_fast.push_back("write_data pe_jump_async_midstep.data");
+  EXPECT_EQ(error_of(all_fast), "no error");
+  std::remove("pe_jump_async_midstep.data");
 }
 
 /* ----------------------------------------------------------------------
