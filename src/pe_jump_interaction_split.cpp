@@ -309,8 +309,9 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
 
 /* ----------------------------------------------------------------------
    the forces of the pair style with every list cut to one pair, at this
-   step and 7 steps later (the time moves with the step): different if a
-   variable of the time or the step scales them
+   step and 1, 7, half the run's and the run's steps later (the time moves
+   with the step): different if a variable of the time or the step scales
+   them (one that is the same at all of these steps is not seen)
 ------------------------------------------------------------------------- */
 
 bool InteractionSplit::depends_on_time()
@@ -349,10 +350,17 @@ bool InteractionSplit::depends_on_time()
     force->pair->compute(0, 0);
     return n ? std::vector<double>(&f[0][0], &f[0][0] + n) : std::vector<double>();
   };
+  // bit for bit (NaN from atoms on top of each other compares unequal)
   const std::vector<double> now = forces();
-  update->ntimestep += 7;
-  const std::vector<double> later = forces();
-  update->ntimestep -= 7;
+  const bigint run = update->laststep - update->ntimestep;
+  bool differ = false;
+  for (const bigint later : {bigint(1), bigint(7), run / 2, run}) {
+    if (differ || (later <= 0)) continue;
+    update->ntimestep += later;
+    const std::vector<double> then = forces();
+    update->ntimestep -= later;
+    differ = (n > 0) && (std::memcmp(now.data(), then.data(), n * sizeof(double)) != 0);
+  }
   for (auto c = cuts.rbegin(); c != cuts.rend(); ++c) {
     c->list->inum = c->inum;
     c->list->ilist = c->ilist;
@@ -360,8 +368,7 @@ bool InteractionSplit::depends_on_time()
     c->list->numneigh[c->i] = c->n_i;
     c->list->firstneigh[c->i] = c->neigh_i;
   }
-  // bit for bit (NaN from atoms on top of each other compares unequal)
-  return (n > 0) && (std::memcmp(now.data(), later.data(), n * sizeof(double)) != 0);
+  return differ;
 }
 
 /* ----------------------------------------------------------------------

@@ -73,8 +73,9 @@ namespace PEJump {
     // on other atoms than the two of the pair (OFF_PAIRS: a hydrogen bond
     // style acts on the hydrogen, TIP4P styles on the atoms of both
     // molecules), and with every list cut to one pair the same forces at
-    // another step (ON_TIME: hybrid/scaled with a variable of time or
-    // step, which the fine and coarse nodes would see at the step end)
+    // later steps of the run (ON_TIME: hybrid/scaled with a variable of
+    // time or step, which the fine and coarse nodes would see at the step
+    // end)
     enum PairFit { FITS, OFF_PAIRS, OFF_LISTS, ON_TIME };
     PairFit pair_fit();
 

@@ -1533,6 +1533,8 @@ TEST(PEJumpAsync, PairStyleThatDependsOnTimeIsRefused)
                                     "velocity all create 1.0 4711 loop geom",
                                     "variable s equal 1.0+0.5*sin(20*time)",
                                     "variable r equal ramp(1.0,2.0)",
+                                    "variable w equal 0.6+0.4*(time>0.015)",
+                                    "variable p equal 0.6+0.1*((step%7)>0)",
                                     "pair_style hybrid/scaled " + scale + " lj/cut 2.5",
                                     "pair_coeff 1 1 lj/cut 1.0 1.0",
                                     "group fast id 1:20",
@@ -1541,7 +1543,8 @@ TEST(PEJumpAsync, PairStyleThatDependsOnTimeIsRefused)
                                     "thermo 0",
                                     "run 8 post no"};
   };
-  for (const std::string scale : {"v_s", "v_r"})
+  // (a switch inside the run, a period of 7 steps: found by a sweep)
+  for (const std::string scale : {"v_s", "v_r", "v_w", "v_p"})
     EXPECT_THAT(error_of(liquid(scale)), ContainsRegex("forces depend on the time")) << scale;
   EXPECT_EQ(error_of(liquid("0.8")), "no error");
 }
