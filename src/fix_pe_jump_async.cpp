@@ -565,12 +565,25 @@ void FixPEJumpAsync::warn_output_between_nodes() const
   const bigint k = clocks->steps();
   const bigint slow = slow_total();    // (all on the fine clock: no warning)
   if ((comm->me != 0) || (k <= 1) || (slow == 0)) return;
-  const bool aligned = ((update->ntimestep - clocks->done()) % k) == 0;
+  const bigint now = update->ntimestep, last = update->laststep;
+  const bigint node = now - clocks->done();    // the last coarse node
+  const auto between = [&](bigint step) {
+    return (step - node) % k != 0;
+  };
+  // a step of this run that is a multiple of every and no coarse node
+  // (the pattern repeats after k multiples)
   const auto off_nodes = [&](int every, bool variable) {
-    return variable || ((every > 0) && (!aligned || (every % k != 0)));
+    if (variable) return true;
+    if (every <= 0) return false;
+    bigint step = ((now + every - 1) / every) * every;
+    for (bigint m = 0; (m < k) && (step <= last); ++m, step += every)
+      if (between(step)) return true;
+    return false;
   };
   std::string what;
-  if (off_nodes(output->thermo_every, output->var_thermo != nullptr)) what = "thermo output";
+  if (off_nodes(output->thermo_every, output->var_thermo != nullptr) || between(now) ||
+      between(last))
+    what = "thermo output";
   for (int i = 0; i < output->ndump; i++)
     if (off_nodes(output->every_dump[i], output->every_dump[i] == 0)) {
       what += what.empty() ? "dump " : ", dump ";
@@ -581,7 +594,7 @@ void FixPEJumpAsync::warn_output_between_nodes() const
                    "Fix {}: {} on steps that are not coarse nodes (every {} steps from step {}): "
                    "there the slow atoms' velocities (ke, temp, press, dumped velocities, computes "
                    "that use them) are those of the coarse step's start",
-                   style, what, k, update->ntimestep - clocks->done() + (clocks->done() ? k : 0));
+                   style, what, k, node);
 }
 
 /* ----------------------------------------------------------------------

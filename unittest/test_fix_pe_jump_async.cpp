@@ -1496,20 +1496,27 @@ TEST(PEJumpAsync, PairForcesOnOtherAtomsAreRefused)
 
 TEST(PEJumpAsync, OutputBetweenCoarseNodesWarnsOnlyWithSlowAtoms)
 {
-  for (const std::string fast : {"id 1:20", "id 1:256"})
-    for (const int every : {3, 10}) {
-      Sim s(MPI_COMM_WORLD, false);
-      lj_liquid(s);
-      s.cmds({"group fast " + fast, "fix 1 all pe_jump/async 5 fast",
-              "thermo " + std::to_string(every)});
-      ::testing::internal::CaptureStdout();
-      s.cmd("run 20 post no");
-      const std::string out = ::testing::internal::GetCapturedStdout();
-      const bool warns = (every == 3) && (fast == "id 1:20");
-      EXPECT_EQ(std::regex_search(out, std::regex("thermo output on steps that are not coarse")),
-                warns)
-          << fast << ", thermo " << every;
-    }
+  struct Case {
+    std::string fast;
+    int every, steps;
+    bool warns;
+  };
+  // (the last two: every output of the run on a coarse node although the
+  // interval is no multiple of K, and a run that ends between nodes)
+  for (const Case &c : {Case{"id 1:20", 3, 20, true}, Case{"id 1:20", 10, 20, false},
+                        Case{"id 1:256", 3, 20, false}, Case{"id 1:256", 10, 20, false},
+                        Case{"id 1:20", 7, 5, false}, Case{"id 1:20", 10, 23, true}}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s);
+    s.cmds({"group fast " + c.fast, "fix 1 all pe_jump/async 5 fast",
+            "thermo " + std::to_string(c.every)});
+    ::testing::internal::CaptureStdout();
+    s.cmd(fmt::format("run {} post no", c.steps));
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    EXPECT_EQ(std::regex_search(out, std::regex("thermo output on steps that are not coarse")),
+              c.warns)
+        << c.fast << ", thermo " << c.every << ", run " << c.steps;
+  }
 }
 
 /* ----------------------------------------------------------------------
