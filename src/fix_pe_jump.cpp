@@ -1053,11 +1053,12 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  list[0] = (scheme->started > 0) ? 1 : 0;
+  list[0] = ((scheme->started > 0) ? 1 : 0) + 2;    // + 2: the census follows
   list[1] = rule->family();
   list[2] = rule->points();
   list[3] = evals_total;
   steps->save(&list[4]);
+  scheme->save_census(&list[6]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1067,9 +1068,11 @@ void FixPEJump::restart(char *buf)
   auto *list = reinterpret_cast<double *>(buf);
   const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
       (static_cast<int>(list[2]) == rule->points());
-  scheme->started = (static_cast<int>(list[0]) != 0) && same_rule;
+  const int head = static_cast<int>(list[0]);
+  scheme->started = ((head & 1) != 0) && same_rule;
   evals_total = list[3];
   steps->load(&list[4]);
+  if (head >= 2) scheme->load_census(&list[6]);
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "

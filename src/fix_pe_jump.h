@@ -156,7 +156,10 @@ class FixPEJump : public Fix {
   // q^{n+1}; mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
   void finish_step(double **favg, double rest, double *mag);
   bool may_open_ahead() const;
-  static constexpr int NGLOBAL = 6;    // values of the global restart state
+  // values of the global restart state: 6, then the census of the last
+  // run's end (TwoStep::NCENSUS), told by the first value (2 or 3; files
+  // of earlier versions: 0 or 1, without it)
+  static constexpr int NGLOBAL = 17;
 };
 
 }    // namespace LAMMPS_NS

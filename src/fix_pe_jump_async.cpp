@@ -1448,10 +1448,13 @@ int FixPEJumpAsync::maxsize_restart()
 
 void FixPEJumpAsync::write_restart(FILE *fp)
 {
-  double list[NGLOBAL] = {(scheme->started > 0) ? 1.0 : 0.0, static_cast<double>(rule->family()),
-                          static_cast<double>(rule->points()), evals_total};
+  // (+ 2: the census follows)
+  double list[NGLOBAL] = {((scheme->started > 0) ? 1.0 : 0.0) + 2.0,
+                          static_cast<double>(rule->family()), static_cast<double>(rule->points()),
+                          evals_total};
   assign->save(&list[9], &list[4]);
   clocks->save(&list[6]);
+  scheme->save_census(&list[12]);
   if (comm->me == 0) {
     int size = sizeof(list);
     fwrite(&size, sizeof(int), 1, fp);
@@ -1466,8 +1469,10 @@ void FixPEJumpAsync::restart(char *buf)
   auto *list = reinterpret_cast<double *>(buf);
   const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
       (static_cast<int>(list[2]) == rule->points());
-  scheme->started = (static_cast<int>(list[0]) != 0) && same_rule;
+  const int head = static_cast<int>(list[0]);
+  scheme->started = ((head & 1) != 0) && same_rule;
   evals_total = list[3];
+  if (head >= 2) scheme->load_census(&list[12]);
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "

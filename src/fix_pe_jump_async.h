@@ -155,8 +155,11 @@ class FixPEJumpAsync : public Fix {
   void coarse_quadrature_sum(double coarse_step);
   void reach_coarse_node(double **favg, double mag[2][2]);
   void continue_fine_step(double **favg, double *mag);
-  void show_classes();                  // vector_atom follows the state table
-  static constexpr int NGLOBAL = 12;    // values of the global restart state
+  void show_classes();    // vector_atom follows the state table
+  // values of the global restart state: 12, then the census of the last
+  // run's end (TwoStep::NCENSUS), told by the first value (2 or 3; files
+  // of earlier versions: 0 or 1, without it)
+  static constexpr int NGLOBAL = 23;
 };
 
 }    // namespace LAMMPS_NS

@@ -275,6 +275,36 @@ void TwoStep::end_run(const AtomSet &set, const NodeSampler::Tallied &energy)
 
 /* ---------------------------------------------------------------------- */
 
+void TwoStep::save_census(double *list) const
+{
+  const bool between_runs = (update->whichflag == 0) && (at_end.atoms >= 0);
+  const Census &c = at_end;
+  const double values[NCENSUS] = {between_runs ? static_cast<double>(c.atoms) : -1.0,
+                                  c.moment[0],
+                                  c.moment[1],
+                                  c.moment[2],
+                                  c.scale,
+                                  c.mass,
+                                  c.dt,
+                                  c.energy.known ? 1.0 : 0.0,
+                                  c.energy.energy,
+                                  c.energy.magnitude,
+                                  minimized ? 1.0 : 0.0};
+  std::copy(values, values + NCENSUS, list);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::load_census(const double *list)
+{
+  at_end = {
+      static_cast<bigint>(list[0]),      {list[1], list[2], list[3]}, list[4], list[5], list[6],
+      {list[7] != 0.0, list[8], list[9]}};
+  minimized = (list[10] != 0.0);
+}
+
+/* ---------------------------------------------------------------------- */
+
 TwoStep::Census TwoStep::census(const AtomSet &set, const NodeSampler::Tallied &energy) const
 {
   double local[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, global[6];

@@ -70,6 +70,12 @@ namespace PEJump {
     // an energy minimization moves the atoms (Fix::min_setup()): the state
     // belongs to the old positions, the next run restarts the scheme
     void atoms_minimized() { minimized = true; }
+    // the census of the last run's end in a restart file written between
+    // runs (NCENSUS values; none if written during a run), so that a run
+    // after read_restart compares with it too
+    static constexpr int NCENSUS = 11;
+    void save_census(double *list) const;
+    void load_census(const double *list);
 
     // [v]^0 = step(i) F/m: the initial kick (scale 1) or none (scale 0)
     void start(const AtomSet &, double **f, double scale, const std::function<double(int)> &step);

@@ -732,6 +732,56 @@ TEST(PEJump, NewForceFieldBetweenRunsRestartsTheScheme)
 }
 
 /* ----------------------------------------------------------------------
+   the census of a run's end travels in restart files written between
+   runs: a force field or masses changed after read_restart restart the
+   scheme as in one session (LAMMPS itself refuses to move atoms there) (a new pair_coeff there was not seen: 1.6e-2
+   relative in the thermo output against the fix defined anew), and an
+   unchanged continuation stays exact (no restart)
+------------------------------------------------------------------------- */
+
+TEST(PEJump, ChangesAfterReadRestartRestartTheScheme)
+{
+  const std::string file = "pe_jump_census.restart";
+  for (const std::string fix :
+       {"pe_jump", "pe_jump quadrature lobatto 3", "pe_jump/async 5 fast"}) {
+    {
+      Sim s;
+      lj_liquid(s);
+      s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
+              "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 50 post no",
+              "write_restart " + file});
+    }
+    for (const std::string change : {"", "pair_coeff 1 1 1.5 1.0 2.5", "mass 1 1.5"}) {
+      std::vector<double> x[2];
+      std::string out[2];
+      for (const int anew : {0, 1}) {
+        Sim s(MPI_COMM_WORLD, false);
+        ::testing::internal::CaptureStdout();
+        try {
+          s.cmds({"read_restart " + file, "neighbor 0.3 bin",
+                  "neigh_modify every 1 delay 0 check yes", "thermo 0", "fix 1 all " + fix});
+          if (anew) s.cmd("unfix 1");
+          if (!change.empty()) s.cmd(change);
+          if (anew) s.cmd("fix 2 all " + fix);
+          s.cmd("run 20 post no");
+        } catch (LAMMPS_NS::LAMMPSException &e) {
+          ADD_FAILURE() << e.what();
+        }
+        out[anew] = ::testing::internal::GetCapturedStdout();
+        x[anew] = unwrapped_positions(s);
+      }
+      if (change.empty()) {
+        EXPECT_THAT(out[0], ::testing::Not(ContainsRegex("restarts"))) << fix;
+      } else {
+        EXPECT_THAT(out[0], ContainsRegex("since the last run")) << fix << ", " << change;
+        EXPECT_LT(max_diff(x[0], x[1]), 1e-12) << fix << ", " << change;
+      }
+    }
+    std::remove(file.c_str());
+  }
+}
+
+/* ----------------------------------------------------------------------
    atoms that join the group between runs have no jump yet: the scheme
    restarts (log message), and the total momentum stays what it was
 ------------------------------------------------------------------------- */
