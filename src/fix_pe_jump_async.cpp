@@ -502,10 +502,6 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   // (mid coarse step the positions belong to different times)
   scheme->agree_on_started(group_atoms(), style, opts.compensate < 0,
                            nodes->tallied(clocks->at_coarse_node()));
-  // the next run compares the energy of the last coarse node, if the run ends at one
-  if ((clocks->steps() > 0) &&
-      ((update->laststep - update->ntimestep + clocks->done()) % clocks->steps() == 0))
-    nodes->ask_energy_at(update->laststep);
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
@@ -547,6 +543,10 @@ void FixPEJumpAsync::setup(int /*vflag*/)
     start_scheme(nullptr, true);
   else
     continue_scheme();
+  // the next run compares the energy of the last coarse node, if the run
+  // ends at one (the clocks as the scheme's start or restart left them)
+  if ((update->laststep - update->ntimestep + clocks->done()) % clocks->steps() == 0)
+    nodes->ask_energy_at(update->laststep);
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   slow_magnitudes();
   comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
