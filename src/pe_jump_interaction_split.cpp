@@ -25,10 +25,49 @@
 #include <algorithm>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <utility>
 
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
+
+namespace {
+// a neighbor list cut to the one pair of atom i and its raw neighbor entry
+// j, or to no pair (i < 0), and put back as it was when this goes
+class OnePair {
+ public:
+  OnePair(NeighList *cut, int i, int j) :
+      list(cut), inum(cut->inum), ilist(cut->ilist), n_i(0), neigh_i(nullptr), pair{i, j}
+  {
+    list->inum = 0;
+    if (i < 0) return;
+    n_i = list->numneigh[i];
+    neigh_i = list->firstneigh[i];
+    list->inum = 1;
+    list->ilist = &pair[0];
+    list->numneigh[i] = 1;
+    list->firstneigh[i] = &pair[1];
+  }
+  ~OnePair()
+  {
+    list->inum = inum;
+    list->ilist = ilist;
+    if (pair[0] < 0) return;
+    list->numneigh[pair[0]] = n_i;
+    list->firstneigh[pair[0]] = neigh_i;
+  }
+  OnePair(const OnePair &) = delete;
+  OnePair &operator=(const OnePair &) = delete;
+
+ private:
+  NeighList *list;
+  int inum;
+  int *ilist;
+  int n_i;
+  int *neigh_i;
+  int pair[2];
+};
+}    // namespace
 
 /* ---------------------------------------------------------------------- */
 
@@ -260,11 +299,9 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
     return false;
   };
 
-  // all lists empty
-  for (auto &p : pairs) {
-    p.inum = p.list->inum;
-    p.list->inum = 0;
-  }
+  // all lists empty (put back in the reverse order: lists may share arrays)
+  std::vector<std::unique_ptr<OnePair>> cuts;
+  for (auto &p : pairs) cuts.push_back(std::make_unique<OnePair>(p.list, -1, 0));
   int local = compute_beyond(
                   [&]() {
                     force->pair->compute(0, 0);
@@ -272,7 +309,7 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
                   -1, -1)
       ? OFF_LISTS
       : FITS;
-  for (auto &p : pairs) p.list->inum = p.inum;
+  while (!cuts.empty()) cuts.pop_back();
 
   // each list cut to one pair, evaluated by its style alone
   for (auto &p : pairs) {
@@ -280,24 +317,13 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
     auto *style = static_cast<Pair *>(list->requestor);
     if (local || (list->requestor_type != NeighList::PAIR) || !style) continue;
     for (const auto &ij : probe_pairs(list)) {
-      const int i = ij.first;
-      const int n_i = list->numneigh[i];
-      int *ilist = list->ilist, *neigh_i = list->firstneigh[i];
-      int one_i = i, one_j = ij.second;
-      list->inum = 1;
-      list->ilist = &one_i;
-      list->numneigh[i] = 1;
-      list->firstneigh[i] = &one_j;
+      const OnePair cut(list, ij.first, ij.second);
       if (compute_beyond(
               [&]() {
                 style->compute(0, 0);
               },
-              i, one_j & NEIGHMASK))
+              ij.first, ij.second & NEIGHMASK))
         local = OFF_PAIRS;
-      list->inum = p.inum;
-      list->ilist = ilist;
-      list->numneigh[i] = n_i;
-      list->firstneigh[i] = neigh_i;
     }
   }
   if (!local && depends_on_time()) local = ON_TIME;
@@ -316,32 +342,12 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
 
 bool InteractionSplit::depends_on_time()
 {
-  struct Cut {
-    NeighList *list;
-    int inum, i, n_i;
-    int *ilist, *neigh_i;
-  };
-  std::vector<Cut> cuts;
-  std::vector<std::pair<int, int>> one;    // the pair of each cut list (i, raw j)
-  one.reserve(pairs.size());
+  // (put back in the reverse order: lists may share arrays)
+  std::vector<std::unique_ptr<OnePair>> cuts;
   for (auto &p : pairs) {
-    NeighList *list = p.list;
-    Cut c = {list, list->inum, -1, 0, list->ilist, nullptr};
-    const auto probes = probe_pairs(list);
-    list->inum = 0;
-    for (const auto &ij : probes)
-      if (ij.first >= 0) {
-        one.push_back(ij);
-        c.i = ij.first;
-        c.n_i = list->numneigh[c.i];
-        c.neigh_i = list->firstneigh[c.i];
-        list->inum = 1;
-        list->ilist = &one.back().first;
-        list->numneigh[c.i] = 1;
-        list->firstneigh[c.i] = &one.back().second;
-        break;
-      }
-    cuts.push_back(c);
+    const auto probes = probe_pairs(p.list);
+    const auto first = probes.empty() ? std::make_pair(-1, 0) : probes.front();
+    cuts.push_back(std::make_unique<OnePair>(p.list, first.first, first.second));
   }
   double **f = atom->f;
   const int n = 3 * (atom->nlocal + atom->nghost);
@@ -361,13 +367,7 @@ bool InteractionSplit::depends_on_time()
     update->ntimestep -= later;
     differ = (n > 0) && (std::memcmp(now.data(), then.data(), n * sizeof(double)) != 0);
   }
-  for (auto c = cuts.rbegin(); c != cuts.rend(); ++c) {
-    c->list->inum = c->inum;
-    c->list->ilist = c->ilist;
-    if (c->i < 0) continue;
-    c->list->numneigh[c->i] = c->n_i;
-    c->list->firstneigh[c->i] = c->neigh_i;
-  }
+  while (!cuts.empty()) cuts.pop_back();
   return differ;
 }
 
