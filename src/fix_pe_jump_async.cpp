@@ -1027,7 +1027,11 @@ void FixPEJumpAsync::check_lists()
   if (guard->has_stats()) {
     // the magnitudes were taken per clock by final_integrate(); the fine
     // nodes' excursions matter only for the atoms that move to them, and
-    // not at all if the Verlet loop checks the only node or the step ends
+    // not at all if the Verlet loop checks the only node or the step ends.
+    // On steps that neigh_modify every or delay exempt from LAMMPS' check,
+    // those atoms are the only ones that moved since the last check: the
+    // fix checks them, and the lists stay those of every 1 delay 0
+    const bool unchecked = !StabilityGuard::lists_checked_now(neighbor);
     const double coarse_step = clocks->steps() * h_step;
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
     local[1] = MAX(hf2 * guard->speed2(), hs2 * guard->slow_speed2());
@@ -1035,7 +1039,8 @@ void FixPEJumpAsync::check_lists()
     local[3] = MAX(guard->jump2(), guard->slow_jump2());
     local[4] = MAX(guard->speed2(), guard->slow_speed2());
     const double lo = (c_lo - from) * h_step, hi = (c_hi - from) * h_step;
-    if (xhold && (tally || (rule->size() > 1)) && !guard->ends_checked(*rule, lo, hi, h_step))
+    if (xhold && (tally || unchecked || (rule->size() > 1)) &&
+        !guard->ends_checked(*rule, lo, hi, h_step))
       local[0] = guard->excursion(group_atoms(&assign->moving_atoms), free_flight(), xhold, lo, hi);
   } else {
     const double cp = rule->node[rule->primary()] * h_step;

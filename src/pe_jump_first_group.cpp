@@ -21,6 +21,7 @@
 #include "group.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "pe_jump_stability_guard.h"
 #include "update.h"
 
 #include <cstring>
@@ -197,18 +198,6 @@ void FirstGroup::clear_stale_forces()
   }
 }
 
-/* ----------------------------------------------------------------------
-   Neighbor::decide() checks the distances at a step if ago + 1 >= delay
-   and (ago + 1) % every == 0 (ago counts the steps since the last build)
-------------------------------------------------------------------------- */
-
-bool FirstGroup::check_due() const
-{
-  if (!neighbor->dist_check || neighbor->build_once) return false;
-  const int ago = neighbor->ago + 1;
-  return (ago >= neighbor->delay) && (ago % neighbor->every == 0);
-}
-
 /* ---------------------------------------------------------------------- */
 
 bool FirstGroup::moved_too_far(int groupbit, bool every_atom_moved)
@@ -219,7 +208,7 @@ bool FirstGroup::moved_too_far(int groupbit, bool every_atom_moved)
     reference_lost = false;
     return true;
   }
-  if (!check_due()) return false;
+  if (!StabilityGuard::lists_checked_now(neighbor)) return false;
   const bool all = held_moved;
   // at a coarse node the held atoms move on to the node at the step's end
   held_moved = every_atom_moved;

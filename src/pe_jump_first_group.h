@@ -99,7 +99,6 @@ namespace PEJump {
     ForceSampler::Touched fine;    // nfirst and partners
 
     void clear_all_forces();
-    bool check_due() const;
     int beyond(const std::vector<int> *only, int groupbit) const;
     bigint outside(int bits) const;    // atoms with all these bits outside G (global)
   };

@@ -86,6 +86,18 @@ bool StabilityGuard::ends_checked(const Quadrature &rule, double lo, double hi, 
       (hi <= h);
 }
 
+/* ----------------------------------------------------------------------
+   Neighbor::decide() checks the distances at a step if ago + 1 >= delay
+   and (ago + 1) % every == 0 (ago counts the steps since the last build)
+------------------------------------------------------------------------- */
+
+bool StabilityGuard::lists_checked_now(const Neighbor *neighbor)
+{
+  if (!neighbor->dist_check || neighbor->build_once) return false;
+  const int ago = neighbor->ago + 1;
+  return (ago >= neighbor->delay) && (ago % neighbor->every == 0);
+}
+
 /* ---------------------------------------------------------------------- */
 
 double StabilityGuard::excursion(const AtomSet &set, const FreeFlight &vel, double **xhold,

@@ -98,6 +98,10 @@ namespace PEJump {
     // t in [lo, hi], of a step h whose nodes include both ends
     bool ends_checked(const Quadrature &, double lo, double hi, double h) const;
 
+    // true if Neighbor::decide() checks the list distances at this step
+    // (neigh_modify check yes, and every and delay let it)
+    static bool lists_checked_now(const class Neighbor *);
+
     // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
     double excursion(const AtomSet &, const FreeFlight &, double **xhold, double lo,
                      double hi) const;

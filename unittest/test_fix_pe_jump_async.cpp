@@ -947,6 +947,70 @@ TEST(PEJumpAsync, OpeningTheNextFineStepAheadKeepsTheTrajectory)
 }
 
 /* ----------------------------------------------------------------------
+   neigh_modify every N (or delay N) exempts steps from LAMMPS' distance
+   check over all atoms; pe_jump/async checks the atoms it moves on those
+   steps, so the lists are rebuilt where every 1 delay 0 rebuilds them (the
+   slow atoms do not move between coarse nodes). A projectile on the fine
+   clock that reaches a slow atom inside a coarse step (without the fix's
+   check its pair was missed for up to K - 1 steps: 1.3e-5 off in etotal),
+   and an LJ liquid with a hot light fast group and buffer layers
+------------------------------------------------------------------------- */
+
+namespace {
+
+struct ListRun {
+  std::vector<double> x;
+  LAMMPS_NS::bigint builds;
+};
+
+ListRun projectile_run(const std::string &neigh, const std::string &rule)
+{
+  Sim s;
+  s.cmds({"units lj", "atom_style atomic", "atom_modify map array",
+          "region box block -10 10 -10 10 -10 10", "create_box 1 box",
+          "create_atoms 1 single -6.0 0.0 0.0", "create_atoms 1 single 0.0 0.3 0.0",
+          "create_atoms 1 single 0.0 -2.0 0.0", "mass 1 1.0", "group fast id 1",
+          "velocity fast set 20.0 0.0 0.0", "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5",
+          "neighbor 0.3 bin", neigh, "timestep 0.001",
+          "fix 1 all pe_jump/async 20 fast quadrature " + rule, "thermo 20", "run 240"});
+  return {positions(s), s.lmp->neighbor->ncalls};
+}
+
+ListRun liquid_run(const std::string &neigh, const std::string &rule)
+{
+  Sim s;
+  lj_liquid(s);
+  s.cmds({neigh, "group fast id 1:24", "velocity fast create 3.0 4711 loop geom",
+          "fix 1 all pe_jump/async 4 fast buffer 1 quadrature " + rule, "thermo 40", "run 400"});
+  return {positions(s), s.lmp->neighbor->ncalls};
+}
+
+}    // namespace
+
+TEST(PEJumpAsync, NeighborCheckIntervalsKeepTheListsOfEveryStep)
+{
+  const std::string every1 = "neigh_modify every 1 delay 0 check yes";
+  for (const std::string rule : {"midpoint", "lobatto 3", "legendre 2"}) {
+    const auto ref = projectile_run(every1, rule);
+    for (const std::string neigh :
+         {"neigh_modify every 7 delay 0 check yes", "neigh_modify every 1000 delay 0 check yes",
+          "neigh_modify every 1 delay 5 check yes"}) {
+      const auto other = projectile_run(neigh, rule);
+      EXPECT_EQ(max_diff(ref.x, other.x), 0.0) << rule << ", " << neigh;
+      EXPECT_EQ(ref.builds, other.builds) << rule << ", " << neigh;
+    }
+    EXPECT_GE(ref.builds, 10) << rule;
+  }
+  for (const std::string rule : {"midpoint", "lobatto 3"}) {
+    const auto ref = liquid_run(every1, rule);
+    const auto other = liquid_run("neigh_modify every 1000 delay 0 check yes", rule);
+    EXPECT_LE(max_diff(ref.x, other.x), 1e-10) << rule;
+    EXPECT_EQ(ref.builds, other.builds) << rule;
+    EXPECT_GE(ref.builds, 20) << rule;
+  }
+}
+
+/* ----------------------------------------------------------------------
    what the opt-in cannot work with is refused
 ------------------------------------------------------------------------- */
 
