@@ -103,6 +103,28 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
                  "velocity Verlet (half the impulse at each end of the step), so its tally would "
                  "be wrong. Use quadrature lobatto 2 or 3, or tally no",
                  self->style, rule_name, ifix->id, ifix->style);
+    // fixes whose forces follow a count of steps of their own (a tether that
+    // moves by a step's length per force call, a coupling or force constant
+    // ramped by the step number): the primary node inside the step would
+    // take them at the step's end (first order in the step)
+    if (!primary_at_end && steps_own_clock(ifix))
+      error->all(
+          FLERR,
+          "Fix {} with quadrature {}: fix {} ({}) sets its forces from its own count of "
+          "steps (smd with cvel moves its tether by a step's length at each force call, "
+          "ti/spring and restrain ramp their constants by the step number), which the force at the "
+          "centre of the step would take at the step's end (first order in the step). "
+          "Use quadrature lobatto 2 or 3 (forces at the step ends)",
+          self->style, rule_name, ifix->id, ifix->style);
+    // fix ttm exchanges energy with the electrons through the velocities at
+    // its force call, which lie inside the step here
+    if (!primary_at_end && utils::strmatch(ifix->style, "^ttm"))
+      error->all(FLERR,
+                 "Fix {} with quadrature {}: fix {} ({}) counts the energy it exchanges with the "
+                 "electrons from the velocities at its force call, as for velocity Verlet, which "
+                 "lie inside the step here, so the electron temperature would go wrong. Use "
+                 "quadrature lobatto 2 or 3",
+                 self->style, rule_name, ifix->id, ifix->style);
     // (fix ti/spring only updates its coupling parameter there)
     const bool moves_atoms = (mask & INITIAL_INTEGRATE) && !ifix->time_integrate &&
         !utils::strmatch(ifix->style, "^ti/spring") && !utils::strmatch(ifix->style, "^dummy");
@@ -143,6 +165,18 @@ void OtherFixes::refuse_shared_atoms() const
                  "are integrated by fix {} ({}) too. Give the two fixes separate groups",
                  self->style, shared, ifix->id, ifix->style);
   }
+}
+
+/* ----------------------------------------------------------------------
+   fixes whose forces follow a count of steps of their own, not the time
+   that the nodes carry
+------------------------------------------------------------------------- */
+
+bool OtherFixes::steps_own_clock(const Fix *fix)
+{
+  for (const char *style : {"^smd", "^ti/spring", "^restrain"})
+    if (utils::strmatch(fix->style, style)) return true;
+  return false;
 }
 
 /* ----------------------------------------------------------------------

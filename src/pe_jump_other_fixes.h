@@ -71,6 +71,7 @@ namespace PEJump {
     // (collective; at init)
     void refuse_shared_atoms() const;
 
+    static bool steps_own_clock(const class Fix *);
     static bool replaces_forces(const Fix *);
 
    private:
