@@ -129,7 +129,15 @@ double StabilityGuard::excursion(const AtomSet &set, const FreeFlight &vel, doub
 
 StabilityGuard::Verdict StabilityGuard::judge(const double *global)
 {
-  if (jump_ref == 0.0) jump_ref = MAX(global[3], global[4]);
+  if (jump_ref == 0.0) {
+    // a run that starts at rest (a perfect lattice at T = 0 that a
+    // thermostat heats) has jumps of round-off size at first: jumps that
+    // move an atom by less than a millionth of the skin per step are no
+    // reference (h^2 = global[2] / global[3])
+    const double skin2 = neighbor->skin * neighbor->skin;
+    const double rest = (global[2] > 0.0) ? 1.0e-12 * skin2 * global[3] / global[2] : 0.0;
+    jump_ref = MAX(MAX(global[3], global[4]), rest);
+  }
   last_growth = (jump_ref > 0.0) ? sqrt(global[3] / jump_ref) : 0.0;
 
   const double half_skin = 0.5 * neighbor->skin;

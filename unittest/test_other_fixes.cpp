@@ -351,6 +351,32 @@ TEST(PEJumpOtherFixes, LangevinReachesTargetTemperature)
   }
 }
 
+/* ----------------------------------------------------------------------
+   a perfect crystal at rest that a thermostat heats (as in LAMMPS'
+   examples/ttm): the jumps begin at round-off size and grow by many orders
+   of magnitude as the thermostat's forces set in, which is no instability
+   (the stability guard stopped every rule but the Lobatto ones at step 3,
+   "jumps grew 8.5e12-fold")
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, CrystalAtRestHeatedByAThermostatRuns)
+{
+  double t_nve = 0.0;
+  for (const std::string integrator :
+       {"nve", "pe_jump", "pe_jump quadrature legendre 2", "pe_jump quadrature lobatto 3"}) {
+    Sim s;
+    s.cmds({"units lj", "atom_style atomic", "lattice fcc 0.8442", "region box block 0 4 0 4 0 4",
+            "create_box 1 box", "create_atoms 1 box", "mass 1 1.0", "pair_style lj/cut 2.5",
+            "pair_coeff 1 1 1.0 1.0 2.5", "fix 1 all " + integrator,
+            "fix 2 all langevin 1.0 1.0 0.5 4711", "timestep 0.005", "thermo 0",
+            "run 500 post no"});
+    const double t = mean_temp(s, 4000);
+    if (integrator == "nve") t_nve = t;
+    EXPECT_NEAR(t, 1.0, 0.04) << integrator;
+    EXPECT_NEAR(t, t_nve, 0.04) << integrator;
+  }
+}
+
 TEST(PEJumpOtherFixes, VelocityRescalingThermostatsAct)
 {
   for (const std::string thermostat :
