@@ -116,6 +116,18 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
           "centre of the step would take at the step's end (first order in the step). "
           "Use quadrature lobatto 2 or 3 (forces at the step ends)",
           self->style, rule_name, ifix->id, ifix->style);
+    // walls that reflect atoms act at the primary node: Legendre rules take
+    // their other nodes on the reflected path (energy drift 25x fix nve's),
+    // and the stochastic wall takes the time since the crossing from where
+    // the step left an atom beyond the wall (lost atoms)
+    if (!primary_at_end && utils::strmatch(ifix->style, "^wall/reflect") &&
+        ((rule_name != "midpoint") || utils::strmatch(ifix->style, "^wall/reflect/")))
+      error->all(FLERR,
+                 "Fix {} with quadrature {}: fix {} ({}) reflects atoms at the node inside the "
+                 "step, where the other nodes of this rule or the wall's own model of the "
+                 "crossing do not fit. Use quadrature lobatto 2 or 3 (nodes at the step ends){}",
+                 self->style, rule_name, ifix->id, ifix->style,
+                 utils::strmatch(ifix->style, "^wall/reflect/") ? "" : ", or midpoint");
     // fix ttm exchanges energy with the electrons through the velocities at
     // its force call, which lie inside the step here
     if (!primary_at_end && utils::strmatch(ifix->style, "^ttm"))
