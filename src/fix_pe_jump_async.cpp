@@ -523,6 +523,12 @@ void FixPEJumpAsync::setup(int /*vflag*/)
                "the atoms of TIP4P molecules), which the split cannot put on their clocks. Use "
                "fix pe_jump",
                force->pair_style);
+  if (fit == InteractionSplit::NOT_ADDITIVE)
+    error->all(FLERR,
+               "Fix pe_jump/async cannot split pair style {}: the force of two pairs of an atom is "
+               "not the sum of the forces of each (a many-body style, e.g. local/density, whose "
+               "pair forces depend on the atoms' local densities). Use fix pe_jump",
+               force->pair_style);
   if (fit == InteractionSplit::ON_TIME)
     error->all(FLERR,
                "Fix pe_jump/async cannot take pair style {}: its forces depend on the time or the "

@@ -142,7 +142,17 @@ void ForceSampler::compute(int mask, int eflag, int vflag)
     timer->stamp(Timer::BOND);
   }
   if (mask & KSPACE) {
-    force->kspace->compute(eflag, vflag);
+    // an evaluation that tallies nothing leaves the tallies of the last
+    // one (ewald/disp and pppm/disp zero their energy, and ewald/disp its
+    // virial, at every call)
+    KSpace *kspace = force->kspace;
+    const double energy = kspace->energy;
+    double virial[6];
+    for (int k = 0; k < 6; k++) virial[k] = kspace->virial[k];
+    kspace->compute(eflag, vflag);
+    if (!eflag) kspace->energy = energy;
+    if (!vflag)
+      for (int k = 0; k < 6; k++) kspace->virial[k] = virial[k];
     timer->stamp(Timer::KSPACE);
   }
   reduce_threads();

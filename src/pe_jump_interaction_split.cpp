@@ -23,6 +23,7 @@
 #include "utils.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -30,6 +31,8 @@
 
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
+
+static constexpr double ADDITIVE_TOLERANCE = 1.0e-12;    // relative, of the largest force
 
 namespace {
 // a neighbor list cut to the one pair of atom i and its raw neighbor entry
@@ -66,6 +69,38 @@ class OnePair {
   int n_i;
   int *neigh_i;
   int pair[2];
+};
+
+// a neighbor list cut to the entries [first, first + count) of the row of
+// atom i, and put back as it was when this goes
+class RowCut {
+ public:
+  RowCut(NeighList *cut, int i, int first, int count) :
+      list(cut), inum(cut->inum), ilist(cut->ilist), atom(i), n_i(cut->numneigh[i]),
+      neigh_i(cut->firstneigh[i])
+  {
+    list->inum = 1;
+    list->ilist = &atom;
+    list->numneigh[i] = count;
+    list->firstneigh[i] = neigh_i + first;
+  }
+  ~RowCut()
+  {
+    list->inum = inum;
+    list->ilist = ilist;
+    list->numneigh[atom] = n_i;
+    list->firstneigh[atom] = neigh_i;
+  }
+  RowCut(const RowCut &) = delete;
+  RowCut &operator=(const RowCut &) = delete;
+
+ private:
+  NeighList *list;
+  int inum;
+  int *ilist;
+  int atom;
+  int n_i;
+  int *neigh_i;
 };
 }    // namespace
 
@@ -326,11 +361,46 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
         local = OFF_PAIRS;
     }
   }
+  for (auto &p : pairs)
+    if (!local && !additive(p.list)) local = NOT_ADDITIVE;
   if (!local && depends_on_time()) local = ON_TIME;
   if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   return static_cast<PairFit>(global);
+}
+
+/* ----------------------------------------------------------------------
+   the forces of the style of a list on the first two pairs of an atom
+   together are those on each pair alone, summed (to round-off): a style
+   whose pair forces depend on the other pairs of the atoms (local
+   densities) cannot be split pair by pair. The style of the list is
+   evaluated alone
+------------------------------------------------------------------------- */
+
+bool InteractionSplit::additive(NeighList *list)
+{
+  auto *style = static_cast<Pair *>(list->requestor);
+  if ((list->requestor_type != NeighList::PAIR) || !style) return true;
+  int atom_i = -1;
+  for (int ii = 0; (ii < list->inum) && (atom_i < 0); ii++)
+    if (list->numneigh[list->ilist[ii]] >= 2) atom_i = list->ilist[ii];
+  if (atom_i < 0) return true;
+  double **f = atom->f;
+  const int n = 3 * (atom->nlocal + atom->nghost);
+  const auto forces = [&](int first, int count) {
+    const RowCut cut(list, atom_i, first, count);
+    if (n) std::fill(&f[0][0], &f[0][0] + n, 0.0);
+    style->compute(0, 0);
+    return std::vector<double>(&f[0][0], &f[0][0] + n);
+  };
+  const std::vector<double> both = forces(0, 2), one = forces(0, 1), other = forces(1, 1);
+  double scale = 0.0, worst = 0.0;
+  for (int k = 0; k < n; k++) {
+    scale = std::max(scale, std::fabs(both[k]));
+    worst = std::max(worst, std::fabs(both[k] - (one[k] + other[k])));
+  }
+  return worst <= ADDITIVE_TOLERANCE * scale;
 }
 
 /* ----------------------------------------------------------------------

@@ -75,8 +75,10 @@ namespace PEJump {
     // molecules), and with every list cut to one pair the same forces at
     // later steps of the run (ON_TIME: hybrid/scaled with a variable of
     // time or step, which the fine and coarse nodes would see at the step
-    // end)
-    enum PairFit { FITS, OFF_PAIRS, OFF_LISTS, ON_TIME };
+    // end), and the forces of two pairs of an atom the sum of the forces of
+    // each (NOT_ADDITIVE: a many-body style that does not say so, e.g.
+    // local/density, whose pair forces depend on the atoms' densities)
+    enum PairFit { FITS, OFF_PAIRS, OFF_LISTS, ON_TIME, NOT_ADDITIVE };
     PairFit pair_fit();
 
     // fraction of all interactions that a subset holds (global)
@@ -127,9 +129,10 @@ namespace PEJump {
     };
     std::vector<PairList> pairs;
     std::vector<std::pair<int, int>> probe_pairs(const NeighList *) const;
-    bool depends_on_time();       // pair_fit(): the pair style, on one pair per list
-    std::vector<int> cross;       // pairs (i,j) of a fine and a coarse atom
-    std::vector<int> clock_of;    // work: per atom 1 fine clock, 2 coarse clock, 0 neither
+    bool depends_on_time();        // pair_fit(): the pair style, on one pair per list
+    bool additive(NeighList *);    // pair_fit(): two pairs of one atom of the list
+    std::vector<int> cross;        // pairs (i,j) of a fine and a coarse atom
+    std::vector<int> clock_of;     // work: per atom 1 fine clock, 2 coarse clock, 0 neither
 
     // one topology list (bonds, angles, ...) of the neighbor class, whose
     // entries are reordered in place: the FINE ones first, then the COARSE

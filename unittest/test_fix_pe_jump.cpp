@@ -1237,3 +1237,45 @@ TEST(PEJump, CompensateKeepsSecondOrderWithVariableSteps)
     EXPECT_NEAR(order, 2.0, 0.15) << opts;
   }
 }
+
+/* ----------------------------------------------------------------------
+   k-space styles that zero their energy and virial at every call
+   (ewald/disp, pppm/disp): the evaluations at the interior nodes of a
+   Lobatto rule tally nothing and must leave the tallies of the step end
+   (before: elong 0 and pe -3.83 instead of -7.16 per atom from step 1, and
+   a split run restarted the scheme as if the force field had changed)
+------------------------------------------------------------------------- */
+
+TEST(PEJump, KSpaceTalliesAreThoseOfTheStepEnd)
+{
+  struct Style {
+    std::string pair, kspace, modify;
+  };
+  const std::vector<Style> styles = {
+      {"lj/long/coul/long long long 3.0", "ewald/disp 1e-5", ""},
+      {"lj/long/coul/long long long 3.0", "pppm/disp 1e-5",
+       "kspace_modify gewald/disp 0.9 mesh/disp 12 12 12 order/disp 5"},
+      {"lj/cut/coul/long 3.0", "ewald 1e-5", ""}};
+  for (const auto &style : styles) {
+    for (const std::string rule : {"lobatto 3", "auto 1e-3", "midpoint"}) {
+      Sim s;
+      s.cmds({"units lj", "atom_style charge", "lattice fcc 0.8442", "region box block 0 3 0 3 0 3",
+              "create_box 2 box", "create_atoms 1 box", "set type 1 type/ratio 2 0.5 87287",
+              "set type 1 charge 0.5", "set type 2 charge -0.5", "mass * 1.0",
+              "pair_style " + style.pair, "pair_coeff * * 1.0 1.0",
+              "kspace_style " + style.kspace});
+      if (!style.modify.empty()) s.cmd(style.modify);
+      s.cmds({"velocity all create 1.5 87287 dist gaussian", "fix 1 all pe_jump quadrature " + rule,
+              "timestep 0.005", "thermo_style custom step pe elong press", "thermo 5",
+              "run 10 post no"});
+      const double pe = s.eval("pe"), elong = s.eval("elong"), press = s.eval("press");
+      // the same positions evaluated anew by the setup of a run of no steps
+      s.cmd("run 0 post no");
+      const std::string what = style.kspace + ", " + rule;
+      EXPECT_LT(elong, -0.01) << what;
+      EXPECT_NEAR(s.eval("elong"), elong, 1e-9 * std::fabs(elong)) << what;
+      EXPECT_NEAR(s.eval("pe"), pe, 1e-9 * std::fabs(pe)) << what;
+      EXPECT_NEAR(s.eval("press"), press, 1e-8 * std::fabs(press)) << what;
+    }
+  }
+}
