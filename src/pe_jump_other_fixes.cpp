@@ -94,49 +94,7 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
       continue;
     }
     const int mask = ifix->setmask();
-    // fix langevin acts at the end of the step only with tally yes (gjf is
-    // refused in sort())
-    if (!primary_at_end && utils::strmatch(ifix->style, "^langevin") && (mask & END_OF_STEP))
-      error->all(FLERR,
-                 "Fix {} with quadrature {} gives the Langevin impulse at the centre of the step, "
-                 "but fix {} ({}) with keyword tally yes counts the energy it exchanges as for "
-                 "velocity Verlet (half the impulse at each end of the step), so its tally would "
-                 "be wrong. Use quadrature lobatto 2 or 3, or tally no",
-                 self->style, rule_name, ifix->id, ifix->style);
-    // fixes whose forces follow a count of steps of their own (a tether that
-    // moves by a step's length per force call, a coupling or force constant
-    // ramped by the step number): the primary node inside the step would
-    // take them at the step's end (first order in the step)
-    if (!primary_at_end && steps_own_clock(ifix))
-      error->all(
-          FLERR,
-          "Fix {} with quadrature {}: fix {} ({}) sets its forces from its own count of "
-          "steps (smd with cvel moves its tether by a step's length at each force call, "
-          "ti/spring and restrain ramp their constants by the step number), which the force at the "
-          "centre of the step would take at the step's end (first order in the step). "
-          "Use quadrature lobatto 2 or 3 (forces at the step ends)",
-          self->style, rule_name, ifix->id, ifix->style);
-    // walls that reflect atoms act at the primary node: Legendre rules take
-    // their other nodes on the reflected path (energy drift 25x fix nve's),
-    // and the stochastic wall takes the time since the crossing from where
-    // the step left an atom beyond the wall (lost atoms)
-    if (!primary_at_end && utils::strmatch(ifix->style, "^wall/reflect") &&
-        ((rule_name != "midpoint") || utils::strmatch(ifix->style, "^wall/reflect/")))
-      error->all(FLERR,
-                 "Fix {} with quadrature {}: fix {} ({}) reflects atoms at the node inside the "
-                 "step, where the other nodes of this rule or the wall's own model of the "
-                 "crossing do not fit. Use quadrature lobatto 2 or 3 (nodes at the step ends){}",
-                 self->style, rule_name, ifix->id, ifix->style,
-                 utils::strmatch(ifix->style, "^wall/reflect/") ? "" : ", or midpoint");
-    // fix ttm exchanges energy with the electrons through the velocities at
-    // its force call, which lie inside the step here
-    if (!primary_at_end && utils::strmatch(ifix->style, "^ttm"))
-      error->all(FLERR,
-                 "Fix {} with quadrature {}: fix {} ({}) counts the energy it exchanges with the "
-                 "electrons from the velocities at its force call, as for velocity Verlet, which "
-                 "lie inside the step here, so the electron temperature would go wrong. Use "
-                 "quadrature lobatto 2 or 3",
-                 self->style, rule_name, ifix->id, ifix->style);
+    if (!primary_at_end) refuse_inside_step(ifix, rule_name);
     // (fix ti/spring only updates its coupling parameter there)
     const bool moves_atoms = (mask & INITIAL_INTEGRATE) && !ifix->time_integrate &&
         !utils::strmatch(ifix->style, "^ti/spring") && !utils::strmatch(ifix->style, "^dummy");
@@ -157,6 +115,59 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
                  "at the step ends only)",
                  self->style, rule_name, ifix->id, ifix->style);
   }
+}
+
+/* ----------------------------------------------------------------------
+   fixes that do not fit a rule whose force evaluation of the MD step lies
+   inside the step (midpoint, Legendre rules)
+------------------------------------------------------------------------- */
+
+void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) const
+{
+  const int mask = ifix->setmask();
+  // fix langevin acts at the end of the step only with tally yes (gjf is
+  // refused in sort())
+  if (utils::strmatch(ifix->style, "^langevin") && (mask & END_OF_STEP))
+    error->all(FLERR,
+               "Fix {} with quadrature {} gives the Langevin impulse at the centre of the step, "
+               "but fix {} ({}) with keyword tally yes counts the energy it exchanges as for "
+               "velocity Verlet (half the impulse at each end of the step), so its tally would "
+               "be wrong. Use quadrature lobatto 2 or 3, or tally no",
+               self->style, rule_name, ifix->id, ifix->style);
+  // fixes whose forces follow a count of steps of their own (a tether that
+  // moves by a step's length per force call, a coupling or force constant
+  // ramped by the step number): the primary node inside the step would
+  // take them at the step's end (first order in the step)
+  if (steps_own_clock(ifix))
+    error->all(
+        FLERR,
+        "Fix {} with quadrature {}: fix {} ({}) sets its forces from its own count of "
+        "steps (smd with cvel moves its tether by a step's length at each force call, "
+        "ti/spring and restrain ramp their constants by the step number), which the force at the "
+        "centre of the step would take at the step's end (first order in the step). "
+        "Use quadrature lobatto 2 or 3 (forces at the step ends)",
+        self->style, rule_name, ifix->id, ifix->style);
+  // walls that reflect atoms act at the primary node: Legendre rules take
+  // their other nodes on the reflected path (energy drift 25x fix nve's),
+  // and the stochastic wall takes the time since the crossing from where
+  // the step left an atom beyond the wall (lost atoms)
+  if (utils::strmatch(ifix->style, "^wall/reflect") &&
+      ((rule_name != "midpoint") || utils::strmatch(ifix->style, "^wall/reflect/")))
+    error->all(FLERR,
+               "Fix {} with quadrature {}: fix {} ({}) reflects atoms at the node inside the "
+               "step, where the other nodes of this rule or the wall's own model of the "
+               "crossing do not fit. Use quadrature lobatto 2 or 3 (nodes at the step ends){}",
+               self->style, rule_name, ifix->id, ifix->style,
+               utils::strmatch(ifix->style, "^wall/reflect/") ? "" : ", or midpoint");
+  // fix ttm exchanges energy with the electrons through the velocities at
+  // its force call, which lie inside the step here
+  if (utils::strmatch(ifix->style, "^ttm"))
+    error->all(FLERR,
+               "Fix {} with quadrature {}: fix {} ({}) counts the energy it exchanges with the "
+               "electrons from the velocities at its force call, as for velocity Verlet, which "
+               "lie inside the step here, so the electron temperature would go wrong. Use "
+               "quadrature lobatto 2 or 3",
+               self->style, rule_name, ifix->id, ifix->style);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -76,6 +76,9 @@ namespace PEJump {
 
    private:
     Fix *self;
+    // the refusals of rules whose force evaluation of the MD step lies
+    // inside the step
+    void refuse_inside_step(Fix *, const std::string &rule_name) const;
     int nadders;         // fixes that add forces
     int nthermostats;    // fixes that thermostat (see thermostats())
     int nforcing;        // those of them that add forces
