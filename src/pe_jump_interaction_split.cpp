@@ -35,50 +35,17 @@ using namespace LAMMPS_NS::PEJump;
 static constexpr double ADDITIVE_TOLERANCE = 1.0e-12;    // relative, of the largest force
 
 namespace {
-// a neighbor list cut to the one pair of atom i and its raw neighbor entry
-// j, or to no pair (i < 0), and put back as it was when this goes
-class OnePair {
+// a neighbor list cut to the entries [first, first + count) of the row of
+// atom i, or to no pair at all (i < 0), and put back as it was when this goes
+class RowCut {
  public:
-  OnePair(NeighList *cut, int i, int j) :
-      list(cut), inum(cut->inum), ilist(cut->ilist), n_i(0), neigh_i(nullptr), pair{i, j}
+  RowCut(NeighList *cut, int i, int first, int count) :
+      list(cut), inum(cut->inum), ilist(cut->ilist), atom(i), n_i(0), neigh_i(nullptr)
   {
     list->inum = 0;
     if (i < 0) return;
     n_i = list->numneigh[i];
     neigh_i = list->firstneigh[i];
-    list->inum = 1;
-    list->ilist = &pair[0];
-    list->numneigh[i] = 1;
-    list->firstneigh[i] = &pair[1];
-  }
-  ~OnePair()
-  {
-    list->inum = inum;
-    list->ilist = ilist;
-    if (pair[0] < 0) return;
-    list->numneigh[pair[0]] = n_i;
-    list->firstneigh[pair[0]] = neigh_i;
-  }
-  OnePair(const OnePair &) = delete;
-  OnePair &operator=(const OnePair &) = delete;
-
- private:
-  NeighList *list;
-  int inum;
-  int *ilist;
-  int n_i;
-  int *neigh_i;
-  int pair[2];
-};
-
-// a neighbor list cut to the entries [first, first + count) of the row of
-// atom i, and put back as it was when this goes
-class RowCut {
- public:
-  RowCut(NeighList *cut, int i, int first, int count) :
-      list(cut), inum(cut->inum), ilist(cut->ilist), atom(i), n_i(cut->numneigh[i]),
-      neigh_i(cut->firstneigh[i])
-  {
     list->inum = 1;
     list->ilist = &atom;
     list->numneigh[i] = count;
@@ -88,6 +55,7 @@ class RowCut {
   {
     list->inum = inum;
     list->ilist = ilist;
+    if (atom < 0) return;
     list->numneigh[atom] = n_i;
     list->firstneigh[atom] = neigh_i;
   }
@@ -335,8 +303,8 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
   };
 
   // all lists empty (put back in the reverse order: lists may share arrays)
-  std::vector<std::unique_ptr<OnePair>> cuts;
-  for (auto &p : pairs) cuts.push_back(std::make_unique<OnePair>(p.list, -1, 0));
+  std::vector<std::unique_ptr<RowCut>> cuts;
+  for (auto &p : pairs) cuts.push_back(std::make_unique<RowCut>(p.list, -1, 0, 0));
   int local = compute_beyond(
                   [&]() {
                     force->pair->compute(0, 0);
@@ -352,12 +320,13 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
     auto *style = static_cast<Pair *>(list->requestor);
     if (local || (list->requestor_type != NeighList::PAIR) || !style) continue;
     for (const auto &ij : probe_pairs(list)) {
-      const OnePair cut(list, ij.first, ij.second);
+      const int j = list->firstneigh[ij.first][ij.second] & NEIGHMASK;
+      const RowCut cut(list, ij.first, ij.second, 1);
       if (compute_beyond(
               [&]() {
                 style->compute(0, 0);
               },
-              ij.first, ij.second & NEIGHMASK))
+              ij.first, j))
         local = OFF_PAIRS;
     }
   }
@@ -413,11 +382,11 @@ bool InteractionSplit::additive(NeighList *list)
 bool InteractionSplit::depends_on_time()
 {
   // (put back in the reverse order: lists may share arrays)
-  std::vector<std::unique_ptr<OnePair>> cuts;
+  std::vector<std::unique_ptr<RowCut>> cuts;
   for (auto &p : pairs) {
     const auto probes = probe_pairs(p.list);
     const auto first = probes.empty() ? std::make_pair(-1, 0) : probes.front();
-    cuts.push_back(std::make_unique<OnePair>(p.list, first.first, first.second));
+    cuts.push_back(std::make_unique<RowCut>(p.list, first.first, first.second, 1));
   }
   double **f = atom->f;
   const int n = 3 * (atom->nlocal + atom->nghost);
@@ -443,8 +412,8 @@ bool InteractionSplit::depends_on_time()
 
 /* ----------------------------------------------------------------------
    per atom type, the closest pair of a list with an atom i of that type:
-   i and its raw neighbor entry (a style may treat types apart, e.g. TIP4P
-   its oxygen)
+   i and the index of the neighbor in its row (a style may treat types
+   apart, e.g. TIP4P its oxygen)
 ------------------------------------------------------------------------- */
 
 std::vector<std::pair<int, int>> InteractionSplit::probe_pairs(const NeighList *list) const
@@ -461,7 +430,7 @@ std::vector<std::pair<int, int>> InteractionSplit::probe_pairs(const NeighList *
       for (int k = 0; k < 3; k++) r2 += (x[i][k] - x[j][k]) * (x[i][k] - x[j][k]);
       if ((best[type[i]] < 0.0) || (r2 < best[type[i]])) {
         best[type[i]] = r2;
-        chosen[type[i]] = {i, list->firstneigh[i][jj]};
+        chosen[type[i]] = {i, jj};
       }
     }
   }

@@ -128,7 +128,7 @@ namespace PEJump {
       PairSubset part[2];
     };
     std::vector<PairList> pairs;
-    std::vector<std::pair<int, int>> probe_pairs(const NeighList *) const;
+    std::vector<std::pair<int, int>> probe_pairs(const NeighList *) const;    // (i, jj)
     bool depends_on_time();        // pair_fit(): the pair style, on one pair per list
     bool additive(NeighList *);    // pair_fit(): two pairs of one atom of the list
     std::vector<int> cross;        // pairs (i,j) of a fine and a coarse atom
