@@ -299,14 +299,10 @@ void FixPEJump::begin_step()
   reinit_pending = 0;
 
   h_step = update->dt;
-  // a fix acting after the atoms moved may reflect them: the fingerprints
-  // of v^{n+1/2} tell final_integrate() which
-  const bool reflections = mirrors_reflections();
   if (opened_ahead) {
     // the last step already began this one (nothing looked in between)
     check_lists();
     opened_ahead = 0;
-    if (reflections) scheme->mark_all(group_atoms());
     return;
   }
   node_impulses();
@@ -316,7 +312,6 @@ void FixPEJump::begin_step()
     check_lists();
     before_open = 0;
     open_and_advance(rule->node[rule->primary()] * h_step);
-    if (reflections) scheme->mark_all(group_atoms());
     return;
   }
   open_steps();
@@ -327,7 +322,6 @@ void FixPEJump::begin_step()
       guard->forget_stats();
     }
   }
-  if (reflections) scheme->mark_all(group_atoms());
   check_lists();
   advance(rule->node[rule->primary()] * h_step);
 }
@@ -377,21 +371,6 @@ void FixPEJump::open_steps()
 bool FixPEJump::watch(int when) const
 {
   return others->may_change_velocities(when);
-}
-
-/* ----------------------------------------------------------------------
-   a fix acting after the atoms moved (wall/reflect at the primary node)
-   may reflect atoms, position and velocity: the step goes on as the
-   mirror image, with the jump (and a start node's force) reflected too.
-   For rules whose only nodes are the primary one and the stored start
-   node (midpoint, lobatto 2); with more nodes the others lie on the
-   mirrored path beyond the wall, and the reflection stays an impulse
-------------------------------------------------------------------------- */
-
-bool FixPEJump::mirrors_reflections() const
-{
-  const bool few_nodes = (rule->size() == 1) || ((rule->size() == 2) && rule->has_end_nodes());
-  return few_nodes && watch(FixConst::POST_INTEGRATE);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -569,10 +548,8 @@ void FixPEJump::final_integrate()
   grow_work();
   evals_step = 1.0;
 
-  // a velocity changed by another fix during the step changed the
-  // free-flight velocity, which atom->v holds: an impulse; a reflection
-  // (wall/reflect) reflects the jump too
-  if (mirrors_reflections()) scheme->mirror_reflections(group_atoms());
+  // a velocity changed by another fix during the step (wall/reflect, ...)
+  // changed the free-flight velocity, which atom->v holds: an impulse
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself

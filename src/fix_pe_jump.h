@@ -124,10 +124,9 @@ class FixPEJump : public Fix {
   void open_steps();                 // v^n -> v^{n+1/2}
   bool open_while_moving() const;    // open_steps() and advance() may be one pass
   void open_and_advance(double t);
-  void advance(double t);              // free flight to the primary node
-  double advance_now(double t);        // free flight now (t, or to the step end)
-  bool watch(int when) const;          // other fixes may change velocities then (OtherFixes hooks)
-  bool mirrors_reflections() const;    // reflections by other fixes reflect the jump too
+  void advance(double t);          // free flight to the primary node
+  double advance_now(double t);    // free flight now (t, or to the step end)
+  bool watch(int when) const;      // other fixes may change velocities then (OtherFixes hooks)
   PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
   void store_start_node();                   // Lobatto start-node forces at q^0
   void refresh_start_nodes();

@@ -382,30 +382,6 @@ bool TwoStep::any_changed(const AtomSet &set) const
   return any;
 }
 
-/* ---------------------------------------------------------------------- */
-
-void TwoStep::mirror_reflections(const AtomSet &set) const
-{
-  double **v = atom->v;
-  double **jmp = jump();
-  double **fs = fstart();
-  const double *sig = vsig();
-  set.each(atom->mask, atom->nlocal, [&](int i) {
-    if (velocity_fingerprint(v[i]) == sig[i]) return;
-    for (int flip = 1; flip < 8; flip++) {
-      double w[3];
-      for (int k = 0; k < 3; k++) w[k] = ((flip >> k) & 1) ? -v[i][k] : v[i][k];
-      if (velocity_fingerprint(w) != sig[i]) continue;
-      for (int k = 0; k < 3; k++) {
-        if (!((flip >> k) & 1)) continue;
-        jmp[i][k] = -jmp[i][k];
-        if (fs) fs[i][k] = -fs[i][k];
-      }
-      return;
-    }
-  });
-}
-
 /* ----------------------------------------------------------------------
    a reversal of all velocities: the free-flight velocity -v^n + [v]^n/2 =
    -v^{n-1/2} continues backwards in time with the same jump

@@ -123,12 +123,6 @@ namespace PEJump {
     void mark(int i) const;    // the fingerprint of atom->v[i]
     void mark_all(const AtomSet &) const;
     bool any_changed(const AtomSet &) const;    // on this rank
-    // atoms whose velocity another fix reflected (components of atom->v
-    // negated since mark: a wall that reverses the normal velocity) have
-    // the same components of their jump (and start-node force) negated, so
-    // that the step goes on as the mirror image of the unreflected one (a
-    // free atom keeps its speed, as with fix nve)
-    void mirror_reflections(const AtomSet &) const;
 
     // 0: the velocities are those the scheme left, 1: all were reversed
     // (then taken as the scheme's), 2: changed otherwise (global)
