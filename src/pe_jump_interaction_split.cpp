@@ -305,22 +305,31 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
   // all lists empty (put back in the reverse order: lists may share arrays)
   std::vector<std::unique_ptr<RowCut>> cuts;
   for (auto &p : pairs) cuts.push_back(std::make_unique<RowCut>(p.list, -1, 0, 0));
-  int local = compute_beyond(
-                  [&]() {
-                    force->pair->compute(0, 0);
-                  },
-                  -1, -1)
-      ? OFF_LISTS
-      : FITS;
+  // every rank evaluates the styles equally often (a style may communicate
+  // inside compute()), and the ranks agree after each stage
+  const auto agree = [&](int mine) {
+    int all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, world);
+    return all;
+  };
+  int global = agree(compute_beyond(
+                         [&]() {
+                           force->pair->compute(0, 0);
+                         },
+                         -1, -1)
+                         ? OFF_LISTS
+                         : FITS);
   while (!cuts.empty()) cuts.pop_back();
 
-  // each list cut to one pair, evaluated by its style alone
+  // each list cut to one pair per atom type (or to none where this rank has
+  // no pair of the type), evaluated by its style alone
+  int local = FITS;
   for (auto &p : pairs) {
     NeighList *list = p.list;
     auto *style = static_cast<Pair *>(list->requestor);
-    if (local || (list->requestor_type != NeighList::PAIR) || !style) continue;
+    if (global || (list->requestor_type != NeighList::PAIR) || !style) continue;
     for (const auto &ij : probe_pairs(list)) {
-      const int j = list->firstneigh[ij.first][ij.second] & NEIGHMASK;
+      const int j = (ij.first < 0) ? -1 : (list->firstneigh[ij.first][ij.second] & NEIGHMASK);
       const RowCut cut(list, ij.first, ij.second, 1);
       if (compute_beyond(
               [&]() {
@@ -330,12 +339,14 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
         local = OFF_PAIRS;
     }
   }
-  for (auto &p : pairs)
-    if (!local && !additive(p.list)) local = NOT_ADDITIVE;
-  if (!local && depends_on_time()) local = ON_TIME;
+  if (!global) global = agree(local);
+  if (!global) {
+    for (auto &p : pairs)
+      if (!additive(p.list)) local = NOT_ADDITIVE;
+    global = agree(local);
+  }
+  if (!global) global = agree(depends_on_time() ? ON_TIME : FITS);
   if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
-  int global = 0;
-  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   return static_cast<PairFit>(global);
 }
 
@@ -354,11 +365,10 @@ bool InteractionSplit::additive(NeighList *list)
   int atom_i = -1;
   for (int ii = 0; (ii < list->inum) && (atom_i < 0); ii++)
     if (list->numneigh[list->ilist[ii]] >= 2) atom_i = list->ilist[ii];
-  if (atom_i < 0) return true;
   double **f = atom->f;
   const int n = 3 * (atom->nlocal + atom->nghost);
   const auto forces = [&](int first, int count) {
-    const RowCut cut(list, atom_i, first, count);
+    const RowCut cut(list, atom_i, (atom_i < 0) ? 0 : first, (atom_i < 0) ? 0 : count);
     if (n) std::fill(&f[0][0], &f[0][0] + n, 0.0);
     style->compute(0, 0);
     return std::vector<double>(&f[0][0], &f[0][0] + n);
@@ -385,7 +395,9 @@ bool InteractionSplit::depends_on_time()
   std::vector<std::unique_ptr<RowCut>> cuts;
   for (auto &p : pairs) {
     const auto probes = probe_pairs(p.list);
-    const auto first = probes.empty() ? std::make_pair(-1, 0) : probes.front();
+    auto first = std::make_pair(-1, 0);
+    for (const auto &ij : probes)
+      if ((first.first < 0) && (ij.first >= 0)) first = ij;
     cuts.push_back(std::make_unique<RowCut>(p.list, first.first, first.second, 1));
   }
   double **f = atom->f;
@@ -413,7 +425,8 @@ bool InteractionSplit::depends_on_time()
 /* ----------------------------------------------------------------------
    per atom type, the closest pair of a list with an atom i of that type:
    i and the index of the neighbor in its row (a style may treat types
-   apart, e.g. TIP4P its oxygen)
+   apart, e.g. TIP4P its oxygen), or (-1, 0) where this rank has no pair
+   with an atom of the type: one entry per type on every rank
 ------------------------------------------------------------------------- */
 
 std::vector<std::pair<int, int>> InteractionSplit::probe_pairs(const NeighList *list) const
@@ -421,7 +434,7 @@ std::vector<std::pair<int, int>> InteractionSplit::probe_pairs(const NeighList *
   double **x = atom->x;
   const int *type = atom->type;
   std::vector<double> best(atom->ntypes + 1, -1.0);
-  std::vector<std::pair<int, int>> chosen(best.size(), {-1, -1});
+  std::vector<std::pair<int, int>> chosen(best.size(), {-1, 0});
   for (int ii = 0; ii < list->inum; ii++) {
     const int i = list->ilist[ii];
     for (int jj = 0; jj < list->numneigh[i]; jj++) {
@@ -434,10 +447,8 @@ std::vector<std::pair<int, int>> InteractionSplit::probe_pairs(const NeighList *
       }
     }
   }
-  std::vector<std::pair<int, int>> found;
-  for (const auto &ij : chosen)
-    if (ij.first >= 0) found.push_back(ij);
-  return found;
+  chosen.erase(chosen.begin());    // (types count from 1)
+  return chosen;
 }
 
 /* ---------------------------------------------------------------------- */

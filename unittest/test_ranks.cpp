@@ -4,7 +4,10 @@
 
 #include "pe_jump_systems.h"
 
+#include "comm.h"
+#include "force.h"
 #include "library.h"
+#include "pair_lj_cut.h"
 
 #include "gtest/gtest.h"
 
@@ -221,4 +224,48 @@ int main(int argc, char **argv)
   MPI_Allreduce(&rv, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
   MPI_Finalize();
   return any;
+}
+
+/* ----------------------------------------------------------------------
+   pe_jump/async probes the pair style at setup (one pair per atom type,
+   two pairs of one atom, the time): every rank must evaluate it equally
+   often, since a style may communicate inside compute(). With the atoms
+   of type 2 on some ranks only, the ranks probed a different number of
+   pairs, and a style that communicates (pair_style local/density) hung
+   on 4 ranks. A toy lj/cut that does a forward communication per compute
+------------------------------------------------------------------------- */
+
+namespace {
+class PairCommunicating : public LAMMPS_NS::PairLJCut {
+ public:
+  explicit PairCommunicating(LAMMPS_NS::LAMMPS *lmp) : PairLJCut(lmp) { comm_forward = 1; }
+  void compute(int eflag, int vflag) override
+  {
+    comm->forward_comm(this);
+    PairLJCut::compute(eflag, vflag);
+  }
+  int pack_forward_comm(int n, int *list, double *buf, int, int *) override
+  {
+    for (int i = 0; i < n; i++) buf[i] = atom->x[list[i]][0];
+    return n;
+  }
+  void unpack_forward_comm(int, int, double *) override {}
+};
+LAMMPS_NS::Pair *pair_communicating_creator(LAMMPS_NS::LAMMPS *lmp)
+{
+  return new PairCommunicating(lmp);
+}
+}    // namespace
+
+TEST(PEJumpRanks, PairStyleProbesAreCollective)
+{
+  Sim s;
+  (*s.lmp->force->pair_map)["lj/cut/comm"] = &pair_communicating_creator;
+  s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "processors 4 1 1",
+          "lattice fcc 0.8442", "region box block 0 8 0 3 0 3", "create_box 2 box",
+          "create_atoms 1 box", "mass * 1.0", "region left block 0 2 INF INF INF INF",
+          "set region left type 2", "velocity all create 1.0 4928", "pair_style lj/cut/comm 2.5",
+          "pair_coeff * * 1.0 1.0 2.5", "group fast type 2", "fix 1 all pe_jump/async 4 fast",
+          "timestep 0.005", "thermo 0", "run 8 post no"});
+  EXPECT_EQ(s.lmp->update->ntimestep, 8);
 }
