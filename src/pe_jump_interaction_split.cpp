@@ -371,7 +371,7 @@ bool InteractionSplit::additive(NeighList *list)
     const RowCut cut(list, atom_i, (atom_i < 0) ? 0 : first, (atom_i < 0) ? 0 : count);
     if (n) std::fill(&f[0][0], &f[0][0] + n, 0.0);
     style->compute(0, 0);
-    return std::vector<double>(&f[0][0], &f[0][0] + n);
+    return n ? std::vector<double>(&f[0][0], &f[0][0] + n) : std::vector<double>();
   };
   const std::vector<double> both = forces(0, 2), one = forces(0, 1), other = forces(1, 1);
   double scale = 0.0, worst = 0.0;
