@@ -1036,8 +1036,9 @@ void FixPEJumpAsync::check_lists()
     // not at all if the Verlet loop checks the only node or the step ends.
     // On steps that neigh_modify every or delay exempt from LAMMPS' check,
     // those atoms are the only ones that moved since the last check: the
-    // fix checks them, and the lists stay those of every 1 delay 0
-    const bool unchecked = !StabilityGuard::lists_checked_now(neighbor);
+    // fix checks them, and the lists stay those of every 1 delay 0 (not
+    // with neigh_modify once yes, which asks for no rebuild)
+    const bool unchecked = !neighbor->build_once && !StabilityGuard::lists_checked_now(neighbor);
     const double coarse_step = clocks->steps() * h_step;
     const double hf2 = h_step * h_step, hs2 = coarse_step * coarse_step;
     local[1] = MAX(hf2 * guard->speed2(), hs2 * guard->slow_speed2());
