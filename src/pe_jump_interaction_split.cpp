@@ -70,6 +70,27 @@ class RowCut {
   int n_i;
   int *neigh_i;
 };
+
+// the forces on all atoms (owned and ghost) that compute() writes from zero
+std::vector<double> forces_of(Atom *atom, const std::function<void()> &compute)
+{
+  const int n = 3 * (atom->nlocal + atom->nghost);
+  double **f = atom->f;
+  if (n) std::fill(&f[0][0], &f[0][0] + n, 0.0);
+  compute();
+  return n ? std::vector<double>(&f[0][0], &f[0][0] + n) : std::vector<double>();
+}
+
+// a force on an atom other than i and j (-1: none) after compute()
+bool forces_beyond(Atom *atom, int i, int j, const std::function<void()> &compute)
+{
+  const std::vector<double> f = forces_of(atom, compute);
+  for (size_t n = 0; 3 * n < f.size(); n++)
+    if ((static_cast<int>(n) != i) && (static_cast<int>(n) != j) &&
+        ((f[3 * n] != 0.0) || (f[3 * n + 1] != 0.0) || (f[3 * n + 2] != 0.0)))
+      return true;
+  return false;
+}
 }    // namespace
 
 /* ---------------------------------------------------------------------- */
@@ -293,61 +314,64 @@ InteractionSplit::PairFit InteractionSplit::pair_fit()
   const int nall = atom->nlocal + atom->nghost;
   std::vector<double> fkeep(3 * nall);
   if (nall) std::copy(&f[0][0], &f[0][0] + 3 * nall, fkeep.begin());
-  // a force on an atom other than i and j (-1: none) after compute()
-  const auto compute_beyond = [&](const std::function<void()> &compute, int i, int j) {
-    if (nall) std::fill(&f[0][0], &f[0][0] + 3 * nall, 0.0);
-    compute();
-    for (int n = 0; n < nall; n++)
-      if ((n != i) && (n != j) && (f[n][0] != 0.0 || f[n][1] != 0.0 || f[n][2] != 0.0)) return true;
-    return false;
-  };
-
-  // all lists empty (put back in the reverse order: lists may share arrays)
-  std::vector<std::unique_ptr<RowCut>> cuts;
-  for (auto &p : pairs) cuts.push_back(std::make_unique<RowCut>(p.list, -1, 0, 0));
   // every rank evaluates the styles equally often (a style may communicate
   // inside compute()), and the ranks agree after each stage
-  const auto agree = [&](int mine) {
-    int all = 0;
-    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, world);
-    return all;
+  const auto agree = [&](bool mine, PairFit verdict) {
+    int local = mine ? verdict : FITS, all = FITS;
+    MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MAX, world);
+    return static_cast<PairFit>(all);
   };
-  int global = agree(compute_beyond(
-                         [&]() {
-                           force->pair->compute(0, 0);
-                         },
-                         -1, -1)
-                         ? OFF_LISTS
-                         : FITS);
-  while (!cuts.empty()) cuts.pop_back();
+  PairFit fit = agree(forces_off_lists(), OFF_LISTS);
+  if (fit == FITS) fit = agree(forces_off_pairs(), OFF_PAIRS);
+  if (fit == FITS) {
+    bool all_additive = true;
+    for (auto &p : pairs) all_additive = additive(p.list) && all_additive;
+    fit = agree(!all_additive, NOT_ADDITIVE);
+  }
+  if (fit == FITS) fit = agree(depends_on_time(), ON_TIME);
+  if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
+  return fit;
+}
 
-  // each list cut to one pair per atom type (or to none where this rank has
-  // no pair of the type), evaluated by its style alone
-  int local = FITS;
+/* ----------------------------------------------------------------------
+   pair_fit(): a force after one evaluation with every list empty (put
+   back in the reverse order: lists may share arrays)
+------------------------------------------------------------------------- */
+
+bool InteractionSplit::forces_off_lists()
+{
+  std::vector<std::unique_ptr<RowCut>> cuts;
+  for (auto &p : pairs) cuts.push_back(std::make_unique<RowCut>(p.list, -1, 0, 0));
+  const bool beyond = forces_beyond(atom, -1, -1, [&]() {
+    force->pair->compute(0, 0);
+  });
+  while (!cuts.empty()) cuts.pop_back();
+  return beyond;
+}
+
+/* ----------------------------------------------------------------------
+   pair_fit(): each list cut to one pair per atom type (or to none where
+   this rank has no pair of the type), evaluated by its style alone: a
+   force on another atom than the two of the pair
+------------------------------------------------------------------------- */
+
+bool InteractionSplit::forces_off_pairs()
+{
+  bool beyond = false;
   for (auto &p : pairs) {
     NeighList *list = p.list;
     auto *style = static_cast<Pair *>(list->requestor);
-    if (global || (list->requestor_type != NeighList::PAIR) || !style) continue;
+    if ((list->requestor_type != NeighList::PAIR) || !style) continue;
     for (const auto &ij : probe_pairs(list)) {
       const int j = (ij.first < 0) ? -1 : (list->firstneigh[ij.first][ij.second] & NEIGHMASK);
       const RowCut cut(list, ij.first, ij.second, 1);
-      if (compute_beyond(
-              [&]() {
-                style->compute(0, 0);
-              },
-              ij.first, j))
-        local = OFF_PAIRS;
+      if (forces_beyond(atom, ij.first, j, [&]() {
+            style->compute(0, 0);
+          }))
+        beyond = true;
     }
   }
-  if (!global) global = agree(local);
-  if (!global) {
-    for (auto &p : pairs)
-      if (!additive(p.list)) local = NOT_ADDITIVE;
-    global = agree(local);
-  }
-  if (!global) global = agree(depends_on_time() ? ON_TIME : FITS);
-  if (nall) std::copy(fkeep.begin(), fkeep.end(), &f[0][0]);
-  return static_cast<PairFit>(global);
+  return beyond;
 }
 
 /* ----------------------------------------------------------------------
@@ -365,17 +389,15 @@ bool InteractionSplit::additive(NeighList *list)
   int atom_i = -1;
   for (int ii = 0; (ii < list->inum) && (atom_i < 0); ii++)
     if (list->numneigh[list->ilist[ii]] >= 2) atom_i = list->ilist[ii];
-  double **f = atom->f;
-  const int n = 3 * (atom->nlocal + atom->nghost);
   const auto forces = [&](int first, int count) {
     const RowCut cut(list, atom_i, (atom_i < 0) ? 0 : first, (atom_i < 0) ? 0 : count);
-    if (n) std::fill(&f[0][0], &f[0][0] + n, 0.0);
-    style->compute(0, 0);
-    return n ? std::vector<double>(&f[0][0], &f[0][0] + n) : std::vector<double>();
+    return forces_of(atom, [&]() {
+      style->compute(0, 0);
+    });
   };
   const std::vector<double> both = forces(0, 2), one = forces(0, 1), other = forces(1, 1);
   double scale = 0.0, worst = 0.0;
-  for (int k = 0; k < n; k++) {
+  for (size_t k = 0; k < both.size(); k++) {
     scale = std::max(scale, std::fabs(both[k]));
     worst = std::max(worst, std::fabs(both[k] - (one[k] + other[k])));
   }
@@ -400,12 +422,10 @@ bool InteractionSplit::depends_on_time()
       if ((first.first < 0) && (ij.first >= 0)) first = ij;
     cuts.push_back(std::make_unique<RowCut>(p.list, first.first, first.second, 1));
   }
-  double **f = atom->f;
-  const int n = 3 * (atom->nlocal + atom->nghost);
   const auto forces = [&]() {
-    if (n) std::fill(&f[0][0], &f[0][0] + n, 0.0);
-    force->pair->compute(0, 0);
-    return n ? std::vector<double>(&f[0][0], &f[0][0] + n) : std::vector<double>();
+    return forces_of(atom, [&]() {
+      force->pair->compute(0, 0);
+    });
   };
   // bit for bit (NaN from atoms on top of each other compares unequal)
   const std::vector<double> now = forces();
@@ -416,7 +436,8 @@ bool InteractionSplit::depends_on_time()
     update->ntimestep += later;
     const std::vector<double> then = forces();
     update->ntimestep -= later;
-    differ = (n > 0) && (std::memcmp(now.data(), then.data(), n * sizeof(double)) != 0);
+    differ =
+        !now.empty() && (std::memcmp(now.data(), then.data(), now.size() * sizeof(double)) != 0);
   }
   while (!cuts.empty()) cuts.pop_back();
   return differ;

@@ -129,6 +129,8 @@ namespace PEJump {
     };
     std::vector<PairList> pairs;
     std::vector<std::pair<int, int>> probe_pairs(const NeighList *) const;    // (i, jj)
+    bool forces_off_lists();       // pair_fit(): forces with every list empty
+    bool forces_off_pairs();       // pair_fit(): forces beyond one pair per type
     bool depends_on_time();        // pair_fit(): the pair style, on one pair per list
     bool additive(NeighList *);    // pair_fit(): two pairs of one atom of the list
     std::vector<int> cross;        // pairs (i,j) of a fine and a coarse atom
