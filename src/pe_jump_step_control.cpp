@@ -46,6 +46,7 @@ void ParasiticDamping::init(double damp_time, double dt, bool thermostats, bool 
     rate = 1.0 / (AUTO_STEPS * dt);
   on = (damp_time > 0.0) || (automatic && thermostats && forcing);
   impulse = 0;
+  changed = false;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -61,6 +62,7 @@ int ParasiticDamping::take_impulse()
 
 void ParasiticDamping::impulse_anywhere(bool seen)
 {
+  if (seen) changed = true;
   if (seen && automatic && thermostatted) on = true;
 }
 

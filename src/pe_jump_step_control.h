@@ -46,10 +46,11 @@ namespace PEJump {
     int take_impulse();                  // this rank's impulse flag, cleared
     void impulse_anywhere(bool seen);    // the flag reduced over the ranks
     bool active() const { return on; }
+    bool velocities_changed() const { return changed; }    // by another fix, this run
     double beta(double h) const;
 
    private:
-    bool automatic = true, on = false, thermostatted = false;
+    bool automatic = true, on = false, thermostatted = false, changed = false;
     double rate = 0.0;
     int impulse = 0;
   };

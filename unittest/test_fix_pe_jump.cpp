@@ -24,6 +24,7 @@
 
 using namespace PEJumpTest;
 using ::testing::ContainsRegex;
+using ::testing::Not;
 
 namespace {
 
@@ -403,6 +404,8 @@ TEST(PEJump, InstabilityDetectedJustAboveCflLimit)
   }
   EXPECT_THAT(msg, ContainsRegex("Fix pe_jump is unstable at step [0-9]+"));
   EXPECT_THAT(msg, ContainsRegex("beyond the stability limit"));
+  // no other fix changed velocities: no advice about them
+  EXPECT_THAT(msg, Not(ContainsRegex("Other fixes changed velocities")));
   // stopped before anything became non-finite
   for (int i = 0; i < s.lmp->atom->nlocal; ++i)
     for (int k = 0; k < 3; ++k) {

@@ -5,6 +5,7 @@
 #include "pe_jump_systems.h"
 
 #include "exceptions.h"
+#include "update.h"
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -451,6 +452,45 @@ TEST(PEJumpOtherFixes, WallReflectKeepsAtomsInside)
     EXPECT_NEAR(s.v(1, 2), 1.0, 1e-12) << rule;
     EXPECT_NEAR(s.x(1, 2), 2.0, 1e-9) << rule;
   }
+}
+
+/* ----------------------------------------------------------------------
+   an LJ liquid between reflecting walls that fix oneway drives down: fix
+   nve and lobatto 2 run, lobatto 3 grows on the reversed velocities until
+   the guard stops it (step 1565). The error names the other fixes' velocity
+   changes and lobatto 2, not only the time step (which is 4x below the
+   liquid's limit)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, InstabilityBesideReflectingFixesNamesThem)
+{
+  const auto input = [](const std::string &rule) {
+    return std::vector<std::string>{"units lj",
+                                    "atom_style atomic",
+                                    "boundary p p f",
+                                    "lattice fcc 0.8442",
+                                    "region box block 0 6 0 6 0 6",
+                                    "create_box 1 box",
+                                    "create_atoms 1 box",
+                                    "mass 1 1.0",
+                                    "velocity all create 1.5 4928459 loop geom",
+                                    "pair_style lj/cut 2.5",
+                                    "pair_coeff 1 1 1.0 1.0 2.5",
+                                    "region half block INF INF INF INF INF 5 units box",
+                                    "fix 1 all pe_jump quadrature " + rule,
+                                    "fix 2 all wall/reflect zlo EDGE zhi EDGE",
+                                    "fix 3 all oneway 10 half -z",
+                                    "timestep 0.005",
+                                    "thermo 0"};
+  };
+  const std::string error = error_of(input("lobatto 3"), "run 2000 post no");
+  EXPECT_THAT(error, ContainsRegex("is unstable at step [0-9]+"));
+  EXPECT_THAT(error, ContainsRegex("Other fixes changed velocities in this run.*fix wall/reflect, "
+                                   "fix oneway\\), use quadrature lobatto 2"));
+  Sim s;
+  s.cmds(input("lobatto 2"));
+  s.cmd("run 2000 post no");
+  EXPECT_EQ(s.lmp->update->ntimestep, 2000);
 }
 
 /* ----------------------------------------------------------------------
