@@ -485,8 +485,9 @@ TEST(PEJumpOtherFixes, InstabilityBesideReflectingFixesNamesThem)
   };
   const std::string error = error_of(input("lobatto 3"), "run 2000 post no");
   EXPECT_THAT(error, ContainsRegex("is unstable at step [0-9]+"));
-  EXPECT_THAT(error, ContainsRegex("Other fixes changed velocities in this run.*fix wall/reflect, "
-                                   "fix oneway\\), use quadrature lobatto 2"));
+  EXPECT_THAT(error,
+              ContainsRegex("Other fixes changed velocities in this run.*fix wall/reflect, "
+                            "fix oneway\\), use quadrature lobatto 2"));
   Sim s;
   s.cmds(input("lobatto 2"));
   s.cmd("run 2000 post no");
