@@ -561,9 +561,9 @@ void FixPEJumpAsync::setup(int /*vflag*/)
 }
 
 /* ----------------------------------------------------------------------
-   thermo output or dumps on steps that are not coarse nodes show the slow
-   atoms' velocities of the coarse step's start (first order in the
-   coarse step): a warning, once per run
+   thermo output, dumps or fixes that sample (fix ave/time, ...) on steps
+   that are not coarse nodes see the slow atoms' velocities of the coarse
+   step's start (first order in the coarse step): a warning, once per run
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::warn_output_between_nodes() const
@@ -595,6 +595,12 @@ void FixPEJumpAsync::warn_output_between_nodes() const
       what += what.empty() ? "dump " : ", dump ";
       what += output->dump[i]->id;
     }
+  // fixes that sample at the end of steps (fix ave/time, ave/correlate,
+  // vector, print, ...); fix dt/reset only sets the next step
+  for (auto *ifix : modify->get_fix_list())
+    if ((ifix != this) && (ifix->setmask() & FixConst::END_OF_STEP) &&
+        !utils::strmatch(ifix->style, "^dt/reset") && off_nodes(ifix->nevery, false))
+      what += fmt::format("{}fix {} ({})", what.empty() ? "" : ", ", ifix->id, ifix->style);
   if (!what.empty())
     error->warning(FLERR,
                    "Fix {}: {} on steps that are not coarse nodes (every {} steps from step {}): "

@@ -1622,6 +1622,30 @@ TEST(PEJumpAsync, OutputBetweenCoarseNodesWarnsOnlyWithSlowAtoms)
 }
 
 /* ----------------------------------------------------------------------
+   fixes that sample at the end of steps see the same first-order values
+   between coarse nodes: fix ave/time every step, K = 4, on an LJ liquid
+   averaged vacf 1.35e-2 off the reference, 2.2e-4 when sampling at the
+   nodes only (fix nve 1.2e-4), and printed no warning
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, SamplingFixesBetweenCoarseNodesWarn)
+{
+  for (const int every : {1, 3, 5, 10}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s);
+    s.cmds({"group fast id 1:20", "fix 1 all pe_jump/async 5 fast", "thermo 10",
+            fmt::format("fix avg all ave/time {} 1 {} c_thermo_temp", every, every)});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 20 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    EXPECT_EQ(std::regex_search(out, std::regex("fix avg \\(ave/time\\) on steps that are not "
+                                                 "coarse nodes")),
+              (every % 5) != 0)
+        << "ave/time every " << every;
+  }
+}
+
+/* ----------------------------------------------------------------------
    a pair style whose forces depend on the time or the step (pair_style
    hybrid/scaled with a variable of time) was taken at the step end at
    every node: first order (two LJ atoms, K = 1, every atom fast: error
