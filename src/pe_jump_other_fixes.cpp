@@ -14,12 +14,14 @@
 #include "pe_jump_other_fixes.h"
 
 #include "atom.h"
+#include "comm.h"
 #include "error.h"
 #include "modify.h"
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "output.h"
 #include "pe_jump_force_sampler.h"
+#include "pe_jump_step_variables.h"
 #include "update.h"
 
 using namespace LAMMPS_NS;
@@ -224,6 +226,37 @@ bool OtherFixes::step_observed() const
   for (const int every : end_of_step_every)
     if (now % every == 0) return true;
   return false;
+}
+
+/* ----------------------------------------------------------------------
+   fixes that take their forces or force field from variables: those that
+   act at every node, and those that add an impulse at the primary node
+------------------------------------------------------------------------- */
+
+void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_end,
+                                  bool only_end_nodes) const
+{
+  if (only_end_nodes || (comm->me != 0)) return;
+  std::string fixes;
+  for (auto *ifix : modify->get_fix_list()) {
+    bool every_node = false, impulse = false;
+    for (const char *style : {"^adapt", "^setforce", "^aveforce"})
+      every_node = every_node || utils::strmatch(ifix->style, style);
+    for (const char *style : {"^addforce", "^efield", "^gravity", "^indent", "^wall/"})
+      impulse = impulse || utils::strmatch(ifix->style, style);
+    if (every_node || (impulse && !primary_at_end))
+      fixes += fmt::format("{}fix {} ({})", fixes.empty() ? "" : ", ", ifix->id, ifix->style);
+  }
+  if (fixes.empty()) return;
+  const auto names = step_number_variables(lmp);
+  if (names.empty()) return;
+  error->warning(FLERR,
+                 "Fix {}: variable(s) {} read the step number (step, elapsed, ramp(), "
+                 "vdisplace(), swiggle(), cwiggle()). If {} take forces from them, quadrature "
+                 "{} samples those forces at nodes that see the step number of the step end: "
+                 "first order in the time step. Write such variables with time, which every "
+                 "node sees at its own time, or use quadrature lobatto 2",
+                 self->style, utils::join_words(names, ", "), fixes, rule_name);
 }
 
 /* ----------------------------------------------------------------------

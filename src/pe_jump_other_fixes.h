@@ -67,6 +67,14 @@ namespace PEJump {
     void refuse_for_rule(const std::string &rule_name, bool primary_at_end,
                          bool only_end_nodes) const;
 
+    // a warning if fixes whose forces may follow variables of the step
+    // number (fix adapt, addforce, indent, ...) sample them where the step
+    // number is not the node's: at interior nodes (fixes acting at every
+    // node), or inside the step (fixes adding an impulse at the primary
+    // node). Variables of time follow the nodes.
+    void warn_step_number(const std::string &rule_name, bool primary_at_end,
+                          bool only_end_nodes) const;
+
     // an error if atoms of this fix are integrated by another fix too
     // (collective; at init)
     void refuse_shared_atoms() const;

@@ -1638,8 +1638,9 @@ TEST(PEJumpAsync, SamplingFixesBetweenCoarseNodesWarn)
     ::testing::internal::CaptureStdout();
     s.cmd("run 20 post no");
     const std::string out = ::testing::internal::GetCapturedStdout();
-    EXPECT_EQ(std::regex_search(out, std::regex("fix avg \\(ave/time\\) on steps that are not "
-                                                 "coarse nodes")),
+    EXPECT_EQ(std::regex_search(out,
+                                std::regex("fix avg \\(ave/time\\) on steps that are not "
+                                           "coarse nodes")),
               (every % 5) != 0)
         << "ave/time every " << every;
   }

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <regex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -168,6 +169,70 @@ TEST(PEJumpOtherFixes, TimeDependentForceFieldIsSecondOrder)
     const double coarse = error(final_x(fix, 0.005), ref), fine = error(final_x(fix, 0.0025), ref);
     EXPECT_LT(coarse, 3.0 * nve) << rule << ": " << coarse << ", nve " << nve;
     EXPECT_GT(coarse / fine, 3.0) << rule << ": " << coarse << " / " << fine;    // second order: 4
+  }
+}
+
+/* ----------------------------------------------------------------------
+   the same ramp written with ramp() (the step number) is sampled with the
+   step end's value at every node: first order (error ratio about 2 per
+   halving of the step, midpoint), and a warning names the variable and
+   the fix. It names nothing for variables of time, for lobatto 2 (whose
+   nodes are step ends), for an impulse at the step end (addforce with
+   lobatto 3), or when no fix that takes forces from variables is defined
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, ForceFieldOfTheStepNumberWarns)
+{
+  const auto run = [](const std::vector<std::string> &cmds, double h, std::string *out) {
+    Sim s(MPI_COMM_WORLD, out == nullptr);
+    lj_liquid(s, 3);
+    s.cmds({"pair_modify shift yes", fmt::format("timestep {}", h), "thermo 0"});
+    s.cmds(cmds);
+    if (out) ::testing::internal::CaptureStdout();
+    s.cmd(fmt::format("run {} post no", static_cast<int>(std::lround(0.25 / h))));
+    if (out) *out = ::testing::internal::GetCapturedStdout();
+    return unwrapped_positions(s);
+  };
+  const auto error = [](const std::vector<double> &a, const std::vector<double> &b) {
+    double d = 0.0;
+    for (size_t i = 0; i < a.size(); i++) d = std::max(d, std::fabs(a[i] - b[i]));
+    return d;
+  };
+  const std::string adapt = "fix 0 all adapt 1 pair lj/cut epsilon * * v_eps";
+  const auto ramp = [&](const std::string &fix, double h, std::string *out = nullptr) {
+    return run({"variable eps equal ramp(1.0,2.0)", adapt, "fix 1 all " + fix}, h, out);
+  };
+  const auto ramp_ref = ramp("nve", 0.005 / 32);
+  std::string out;
+  const double coarse = error(ramp("pe_jump", 0.005, &out), ramp_ref);
+  const double fine = error(ramp("pe_jump", 0.0025), ramp_ref);
+  EXPECT_LT(coarse / fine, 2.5) << coarse << " / " << fine;    // first order: 2
+  EXPECT_THAT(out, ContainsRegex("variable\\(s\\) eps read the step number.*fix 0 \\(adapt\\)"));
+
+  struct Case {
+    std::vector<std::string> cmds;
+    bool warns;
+  };
+  const std::vector<Case> cases = {
+      {{"variable eps equal 1.0+4.0*time", adapt, "fix 1 all pe_jump"}, false},
+      {{"variable eps equal ramp(1.0,2.0)", adapt, "fix 1 all pe_jump quadrature lobatto 2"},
+       false},
+      {{"variable eps equal ramp(1.0,2.0)", adapt, "fix 1 all pe_jump quadrature lobatto 3"}, true},
+      {{"variable t equal elapsed*dt", "variable eps equal 1.0+v_t", adapt, "fix 1 all pe_jump"},
+       true},
+      {{"variable fx equal 0.1*step*dt", "fix 0 all addforce v_fx 0.0 0.0", "fix 1 all pe_jump"},
+       true},
+      {{"variable fx equal 0.1*step*dt", "fix 0 all addforce v_fx 0.0 0.0",
+        "fix 1 all pe_jump quadrature lobatto 3"},
+       false},
+      {{"variable nstep equal 2*dt", "variable fx equal v_nstep", "fix 0 all addforce v_fx 0.0 0.0",
+        "fix 1 all pe_jump"},
+       false},
+      {{"variable s equal step", "fix 0 all viscous 0.1", "fix 1 all pe_jump"}, false}};
+  for (const auto &c : cases) {
+    run(c.cmds, 0.005, &out);
+    EXPECT_EQ(std::regex_search(out, std::regex("read the step number")), c.warns)
+        << c.cmds.front() << " ... " << c.cmds.back();
   }
 }
 
