@@ -1063,7 +1063,8 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  list[0] = ((scheme->started > 0) ? 1 : 0) + 2;    // + 2: the census follows
+  // + 2: the census follows; + 4: damp auto damps since a velocity change
+  list[0] = ((scheme->started > 0) ? 1 : 0) + 2 + (damping->kicked() ? 4 : 0);
   list[1] = rule->family();
   list[2] = rule->points();
   list[3] = evals_total;
@@ -1083,6 +1084,7 @@ void FixPEJump::restart(char *buf)
   evals_total = list[3];
   steps->load(&list[4]);
   if (head >= 2) scheme->load_census(&list[6]);
+  damping->set_kicked((head & 4) != 0);
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "
