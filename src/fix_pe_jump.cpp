@@ -437,7 +437,7 @@ void FixPEJump::advance(double t)
 
 double FixPEJump::advance_now(double t)
 {
-  const bool later = (t != h_step) && rebuild_due();
+  const bool later = (t != h_step) && guard->rebuild_forced();
   advance_pending = later ? t - h_step : 0.0;
   return later ? h_step : t;
 }
@@ -456,24 +456,6 @@ void FixPEJump::post_neighbor()
   });
   advance_pending = 0.0;
   comm->forward_comm();
-}
-
-/* ----------------------------------------------------------------------
-   true if the Verlet loop will rebuild the neighbor lists in this step
-   whatever the atoms' positions: the decision of Neighbor::decide() for
-   lists without a distance check (neigh_modify check no). With a distance
-   check the decision depends on the positions and is left to LAMMPS.
-------------------------------------------------------------------------- */
-
-bool FixPEJump::rebuild_due() const
-{
-  if (neighbor->dist_check || neighbor->build_once) return false;
-  const bigint now = update->ntimestep;
-  if (output->restart_flag && (now == output->next_restart)) return true;
-  for (const auto *ifix : modify->get_fix_list())
-    if (ifix->force_reneighbor && (now == ifix->next_reneighbor)) return true;
-  const int ago = neighbor->ago + 1;
-  return (ago >= neighbor->delay) && (ago % neighbor->every == 0);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -139,7 +139,6 @@ class FixPEJump : public Fix {
   void finish_check(const double *local);
   std::string instability_advice() const;
   void tally_at_node();
-  bool rebuild_due() const;
   double pseudo_energy_now();
   void global_state(double *) const;
 

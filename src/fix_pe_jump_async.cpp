@@ -77,7 +77,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
     assign(nullptr), classes(nullptr), work(nullptr), first(nullptr), reinit_pending(0),
-    opened_ahead(0), h_step(0.0), evals_step(0.0), evals_total(0.0), changes_seen(0)
+    opened_ahead(0), build_ahead(0.0), h_step(0.0), evals_step(0.0), evals_total(0.0),
+    changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -389,6 +390,7 @@ void FixPEJumpAsync::post_neighbor()
   assign->find_slow(*split);
   if (assign->find_moving(*split, *clocks, free_flight())) comm->forward_comm();
   first->find_partners(assign->participants(), assign->moving(), groupbit);
+  if (build_ahead != 0.0) back_from_build();
 }
 
 /* ----------------------------------------------------------------------
@@ -712,6 +714,48 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
     advance(t);
   }
   opened_ahead = 0;
+  if (guard->rebuild_forced()) ahead_for_build();
+}
+
+/* ----------------------------------------------------------------------
+   lists that LAMMPS rebuilds in this step whatever the atoms do
+   (neigh_modify check no, which misses the pairs beyond the skin) are
+   built where a run continued after this step builds them: every atom at
+   the step end. The slow atoms that sit out the fine steps catch up there
+   (and stay); those that move go on from their primary node, and
+   back_from_build() brings them back after the build
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::ahead_for_build()
+{
+  const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
+  const PEJump::FreeFlight vhalf = free_flight();
+  double **x = atom->x;
+  const double *tpos = clocks->times();
+  clocks->moving_at(h_step);
+  clocks->catch_up_all(vhalf, assign->moving());
+  if (rest == 0.0) return;
+  group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
+    if (tpos[i] == AsyncClocks::MOVING)
+      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf(i, k);
+  });
+  build_ahead = rest;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::back_from_build()
+{
+  const PEJump::FreeFlight vhalf = free_flight();
+  double **x = atom->x;
+  const double *tpos = clocks->times();
+  group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
+    if (tpos[i] == AsyncClocks::MOVING)
+      for (int k = 0; k < 3; k++) x[i][k] -= build_ahead * vhalf(i, k);
+  });
+  clocks->moving_at(rule->node[rule->primary()] * h_step);
+  build_ahead = 0.0;
+  comm->forward_comm();
 }
 
 /* ----------------------------------------------------------------------

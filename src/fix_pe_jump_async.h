@@ -112,6 +112,7 @@ class FixPEJumpAsync : public Fix {
 
   int reinit_pending;    // redo the initial kick when all fix forces are in
   int opened_ahead;      // the last fine step began this one (nothing looked in between)
+  double build_ahead;    // the moving atoms went on by this for a forced list build
   double h_step;         // the fine step
   double evals_step, evals_total;    // force evaluations (units of full ones)
   int changes_seen;                  // another fix changed a velocity (this rank)
@@ -127,7 +128,9 @@ class FixPEJumpAsync : public Fix {
   void refuse_other_fixes() const;
   void check_clocks();
   void start_scheme(const char *, bool);
-  void change_clocks();    // a dynamic fast group or fast auto, at coarse nodes
+  void change_clocks();      // a dynamic fast group or fast auto, at coarse nodes
+  void ahead_for_build();    // to the step end for lists built whatever the atoms do
+  void back_from_build();
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);
   void choose_fast(std::vector<int> &chosen) const;
   void restart_jumps(const std::vector<int> &to_fine, double **f);

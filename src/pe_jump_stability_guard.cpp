@@ -15,7 +15,10 @@
 
 #include "atom.h"
 #include "error.h"
+#include "fix.h"
+#include "modify.h"
 #include "neighbor.h"
+#include "output.h"
 #include "pe_jump_quadrature.h"
 #include "update.h"
 
@@ -117,6 +120,19 @@ double StabilityGuard::excursion(const AtomSet &set, const FreeFlight &vel, doub
   };
   set.each(atom->mask, atom->nlocal, one);
   return worst;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool StabilityGuard::rebuild_forced() const
+{
+  if (neighbor->dist_check || neighbor->build_once) return false;
+  const bigint now = update->ntimestep;
+  if (output->restart_flag && (now == output->next_restart)) return true;
+  for (const auto *ifix : modify->get_fix_list())
+    if (ifix->force_reneighbor && (now == ifix->next_reneighbor)) return true;
+  const int ago = neighbor->ago + 1;
+  return (ago >= neighbor->delay) && (ago % neighbor->every == 0);
 }
 
 /* ----------------------------------------------------------------------

@@ -101,6 +101,10 @@ namespace PEJump {
     // true if Neighbor::decide() checks the list distances at this step
     // (neigh_modify check yes, and every and delay let it)
     static bool lists_checked_now(const class Neighbor *);
+    // true if the Verlet loop rebuilds the lists in this step whatever the
+    // atoms' positions (neigh_modify check no: every N steps, or a restart
+    // file or a fix asks for it); with a distance check it is up to LAMMPS
+    bool rebuild_forced() const;
 
     // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
     double excursion(const AtomSet &, const FreeFlight &, double **xhold, double lo,

@@ -430,6 +430,51 @@ TEST(PEJumpAsync, SplitRunsAndRestartsInsideCoarseStepAreExact)
 }
 
 /* ----------------------------------------------------------------------
+   with neigh_modify check no the lists are rebuilt every N steps wherever
+   the atoms are, and pairs beyond the skin are missed. A continued run
+   builds its lists at the step end (the atoms moving with the fine steps
+   there, the slow ones caught up); the unbroken run must build them there
+   too, or another set of pairs is missed: LAMMPS' melt example settings
+   (T = 3, every 20 check no), K = 3, were 1.1e-3 off for midpoint and
+   1.2e-3 for legendre 2 (fix nve 5e-14)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, SplitRunsAndRestartsUnderNeighCheckNoAreExact)
+{
+  for (const std::string rule : {"midpoint", "legendre 2", "lobatto 3"}) {
+    // (the restart file keeps the group)
+    const std::vector<std::string> setup = {"neigh_modify every 20 delay 0 check no",
+                                            "fix 1 all pe_jump/async 3 fast quadrature " + rule,
+                                            "timestep 0.005", "thermo 0"};
+    const auto state = [&](const std::vector<std::string> &runs) {
+      Sim s;
+      lj_liquid(s, 5, "dist gaussian");
+      s.cmds({"velocity all scale 3.0", "region left block 0 2.5 INF INF INF INF",
+              "group fast region left"});
+      s.cmds(setup);
+      s.cmds(runs);
+      return unwrapped_positions(s);
+    };
+    const auto unbroken = state({"run 200 post no"});
+    for (const int at : {60, 100}) {
+      const auto split = state({fmt::format("run {} post no", at),
+                                fmt::format("run {} post no", 200 - at)});
+      std::vector<std::string> restart = {fmt::format("run {} post no", at),
+                                          "write_restart pe_jump_async_checkno.restart",
+                                          "clear",
+                                          "read_restart pe_jump_async_checkno.restart",
+                                          "neighbor 0.3 bin"};
+      restart.insert(restart.end(), setup.begin(), setup.end());
+      restart.push_back(fmt::format("run {} post no", 200 - at));
+      const auto restarted = state(restart);
+      std::remove("pe_jump_async_checkno.restart");
+      EXPECT_LT(max_diff(unbroken, split), 1e-11) << rule << ", split at " << at;
+      EXPECT_LT(max_diff(unbroken, restarted), 1e-11) << rule << ", restart at " << at;
+    }
+  }
+}
+
+/* ----------------------------------------------------------------------
    bad input
 ------------------------------------------------------------------------- */
 
