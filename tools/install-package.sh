@@ -9,6 +9,15 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 lammps=${1:?usage: install-package.sh /path/to/lammps}
 [ -f "$lammps/src/lammps.h" ] && [ -f "$lammps/cmake/CMakeLists.txt" ] ||
   { echo "install-package: $lammps is not a LAMMPS source tree with a CMake build" >&2; exit 1; }
+# the same oldest LAMMPS as cmake/lammps-version.cmake (PEJUMP_SKIP_VERSION_CHECK=1 skips it)
+version=$(sed -n 's/^#define LAMMPS_VERSION "\(.*\)"/\1/p' "$lammps/src/version.h")
+number=$(date -d "$version" +%Y%m%d 2>/dev/null || echo 0)
+if [ "$number" -lt 20250204 ] && [ -z "${PEJUMP_SKIP_VERSION_CHECK:-}" ]; then
+  echo "install-package: PE-JUMP needs LAMMPS 4 Feb 2025 or newer (tested with 4 Feb 2025 and" \
+    "4 Jul 2026); $lammps is LAMMPS ${version:-of unknown version}, which lacks interfaces the" \
+    "styles use (PEJUMP_SKIP_VERSION_CHECK=1 tries anyway)" >&2
+  exit 1
+fi
 mkdir -p "$lammps/src/PE-JUMP"
 cp "$here"/src/*.cpp "$here"/src/*.h "$lammps/src/PE-JUMP/"
 cat > "$lammps/src/PE-JUMP/README" <<TXT
