@@ -583,13 +583,8 @@ TEST(PEJump, SplitRunsAndRestartsKeepTheDampingOfAThermostat)
     std::remove("pe_jump_damp.restart");
     ASSERT_EQ(unbroken.size(), split.size());
     ASSERT_EQ(unbroken.size(), restarted.size());
-    double dsplit = 0.0, drestart = 0.0;
-    for (size_t i = 0; i < unbroken.size(); ++i) {
-      dsplit = std::max(dsplit, std::fabs(split[i] - unbroken[i]));
-      drestart = std::max(drestart, std::fabs(restarted[i] - unbroken[i]));
-    }
-    EXPECT_LT(dsplit, 1e-12) << rule;
-    EXPECT_LT(drestart, 1e-12) << rule;
+    EXPECT_LT(max_diff(unbroken, split), 1e-12) << rule;
+    EXPECT_LT(max_diff(unbroken, restarted), 1e-12) << rule;
   }
 }
 
