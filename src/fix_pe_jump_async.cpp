@@ -388,9 +388,10 @@ void FixPEJumpAsync::post_neighbor()
   split->build();
   // atoms are reordered only when the lists are rebuilt
   assign->find_slow(*split);
+  // (before find_moving() holds the slow atoms that sit out at their time)
+  if (build_ahead != 0.0) back_from_build();
   if (assign->find_moving(*split, *clocks, free_flight())) comm->forward_comm();
   first->find_partners(assign->participants(), assign->moving(), groupbit);
-  if (build_ahead != 0.0) back_from_build();
 }
 
 /* ----------------------------------------------------------------------
@@ -722,8 +723,10 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
    (neigh_modify check no, which misses the pairs beyond the skin) are
    built where a run continued after this step builds them: every atom at
    the step end. The slow atoms that sit out the fine steps catch up there
-   (and stay); those that move go on from their primary node, and
-   back_from_build() brings them back after the build
+   (and stay); those that move (on the last fine step of a coarse step:
+   all) go on from their primary node, and back_from_build() brings them
+   back after the build, before the clocks hold the atoms that sit out
+   the next fine steps (at the primary node's time)
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::ahead_for_build()
