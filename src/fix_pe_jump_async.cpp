@@ -598,12 +598,15 @@ void FixPEJumpAsync::warn_output_between_nodes() const
       what += what.empty() ? "dump " : ", dump ";
       what += output->dump[i]->id;
     }
-  // fixes that sample at the end of steps (fix ave/time, ave/correlate,
-  // vector, print, ...); fix dt/reset only sets the next step
-  for (auto *ifix : modify->get_fix_list())
-    if ((ifix != this) && (ifix->setmask() & FixConst::END_OF_STEP) &&
-        !utils::strmatch(ifix->style, "^dt/reset") && off_nodes(ifix->nevery, false))
+  // fixes that sample values at the end of steps every Nevery steps (fix
+  // ave/time, ave/correlate, ave/atom, vector, print, ...)
+  for (auto *ifix : modify->get_fix_list()) {
+    bool samples = false;
+    for (const char *sampler : {"^ave/", "^vector", "^print"})
+      samples = samples || utils::strmatch(ifix->style, sampler);
+    if (samples && off_nodes(ifix->nevery, false))
       what += fmt::format("{}fix {} ({})", what.empty() ? "" : ", ", ifix->id, ifix->style);
+  }
   if (!what.empty())
     error->warning(FLERR,
                    "Fix {}: {} on steps that are not coarse nodes (every {} steps from step {}): "

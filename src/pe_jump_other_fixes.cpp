@@ -229,6 +229,20 @@ bool OtherFixes::step_observed() const
 }
 
 /* ----------------------------------------------------------------------
+   the fixes that reverse velocities (reflecting walls, fix oneway), as a
+   list for messages ("fix 2 (wall/reflect), fix 3 (oneway)"; empty if none)
+------------------------------------------------------------------------- */
+
+std::string OtherFixes::reversing_fixes() const
+{
+  std::string list;
+  for (auto *ifix : modify->get_fix_list())
+    if (utils::strmatch(ifix->style, "^wall/reflect") || utils::strmatch(ifix->style, "^oneway"))
+      list += fmt::format("{}fix {} ({})", list.empty() ? "" : ", ", ifix->id, ifix->style);
+  return list;
+}
+
+/* ----------------------------------------------------------------------
    fixes that take their forces or force field from variables: those that
    act at every node, and those that add an impulse at the primary node
 ------------------------------------------------------------------------- */
@@ -239,9 +253,10 @@ void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_
   if (only_end_nodes || (comm->me != 0)) return;
   std::string fixes;
   for (auto *ifix : modify->get_fix_list()) {
-    bool every_node = false, impulse = false;
-    for (const char *style : {"^adapt", "^setforce", "^aveforce"})
-      every_node = every_node || utils::strmatch(ifix->style, style);
+    // (fix setforce and aveforce, which also act at every node, mostly
+    // hold atoms with constants: not named, to keep the warning meaningful)
+    const bool every_node = utils::strmatch(ifix->style, "^adapt");
+    bool impulse = false;
     for (const char *style : {"^addforce", "^efield", "^gravity", "^indent", "^wall/"})
       impulse = impulse || utils::strmatch(ifix->style, style);
     if (every_node || (impulse && !primary_at_end))
@@ -252,10 +267,10 @@ void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_
   if (names.empty()) return;
   error->warning(FLERR,
                  "Fix {}: variable(s) {} read the step number (step, elapsed, ramp(), "
-                 "vdisplace(), swiggle(), cwiggle()). If {} take forces from them, quadrature "
-                 "{} samples those forces at nodes that see the step number of the step end: "
-                 "first order in the time step. Write such variables with time, which every "
-                 "node sees at its own time, or use quadrature lobatto 2",
+                 "vdisplace(), swiggle(), cwiggle()). Forces or parameters taken from them by "
+                 "{} are sampled by quadrature {} at nodes that see the step number of the "
+                 "step end: first order in the time step. Write such variables with time, "
+                 "which every node sees at its own time, or use quadrature lobatto 2",
                  self->style, utils::join_words(names, ", "), fixes, rule_name);
 }
 

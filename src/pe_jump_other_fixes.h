@@ -67,6 +67,9 @@ namespace PEJump {
     void refuse_for_rule(const std::string &rule_name, bool primary_at_end,
                          bool only_end_nodes) const;
 
+    // the fixes that reverse velocities (wall/reflect, oneway) for messages
+    std::string reversing_fixes() const;
+
     // a warning if fixes whose forces may follow variables of the step
     // number (fix adapt, addforce, indent, ...) sample them where the step
     // number is not the node's: at interior nodes (fixes acting at every

@@ -62,7 +62,8 @@ int ParasiticDamping::take_impulse()
 
 void ParasiticDamping::impulse_anywhere(bool seen)
 {
-  if (seen) changed = ever_changed = true;
+  if (seen) changed = true;
+  if (seen && thermostatted) ever_changed = true;
   if (seen && automatic && thermostatted) on = true;
 }
 

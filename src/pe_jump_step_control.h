@@ -49,9 +49,9 @@ namespace PEJump {
     bool velocities_changed() const { return changed; }    // by another fix, this run
     double beta(double h) const;
 
-    // whether velocities were changed by another fix since the fix was
-    // defined: damp auto goes on damping in the next run (split runs and
-    // restarts continue as one run)
+    // whether velocities were changed by another fix beside a thermostat
+    // since the fix was defined: damp auto goes on damping in the next run
+    // (split runs and restarts continue as one run)
     bool kicked() const { return ever_changed; }
     void set_kicked(bool flag) { ever_changed = flag; }
 

@@ -76,9 +76,19 @@ std::vector<std::string> PEJump::step_number_variables(LAMMPS *lmp)
   std::vector<std::string> formulas(count), found;
   for (int i = 0; i < count; i++) {
     if (!variable->equalstyle(i) && !variable->atomstyle(i)) continue;
+    // " formula value" for equal-style variables (the value, last, has no
+    // blank: "(undefined)" or a number), " formula" for atom-style ones
     const std::string text = info.get_variable_info(i);
     const size_t def = text.find("def =");
-    if (def != std::string::npos) formulas[i] = text.substr(def + 5);
+    if (def == std::string::npos) continue;
+    std::string formula = text.substr(def + 5);
+    while (!formula.empty() && std::isspace(static_cast<unsigned char>(formula.back())))
+      formula.pop_back();
+    if (variable->equalstyle(i)) {
+      const size_t value = formula.find_last_of(' ');
+      formula.resize((value == std::string::npos) ? 0 : value);
+    }
+    formulas[i] = formula;
   }
   std::vector<bool> done(count, false);
   bool more = true;

@@ -20,6 +20,7 @@
 
 using namespace PEJumpTest;
 using ::testing::ContainsRegex;
+using ::testing::Not;
 
 namespace {
 
@@ -228,7 +229,14 @@ TEST(PEJumpOtherFixes, ForceFieldOfTheStepNumberWarns)
       {{"variable nstep equal 2*dt", "variable fx equal v_nstep", "fix 0 all addforce v_fx 0.0 0.0",
         "fix 1 all pe_jump"},
        false},
-      {{"variable s equal step", "fix 0 all viscous 0.1", "fix 1 all pe_jump"}, false}};
+      {{"variable s equal step", "fix 0 all viscous 0.1", "fix 1 all pe_jump"}, false},
+      // the keyword last in the formula
+      {{"variable fx equal 1e-4*step", "fix 0 all addforce v_fx 0.0 0.0", "fix 1 all pe_jump"},
+       true},
+      // fix setforce holding atoms with constants is not named
+      {{"variable s equal step", "group one id 1", "fix 0 one setforce 0.0 0.0 0.0",
+        "fix 1 all pe_jump"},
+       false}};
   for (const auto &c : cases) {
     run(c.cmds, 0.005, &out);
     EXPECT_EQ(std::regex_search(out, std::regex("read the step number")), c.warns)
@@ -551,12 +559,25 @@ TEST(PEJumpOtherFixes, InstabilityBesideReflectingFixesNamesThem)
   const std::string error = error_of(input("lobatto 3"), "run 2000 post no");
   EXPECT_THAT(error, ContainsRegex("is unstable at step [0-9]+"));
   EXPECT_THAT(error,
-              ContainsRegex("Other fixes changed velocities in this run.*fix wall/reflect, "
-                            "fix oneway\\), use quadrature lobatto 2"));
+              ContainsRegex("Velocities were reversed in this run by fix 2 "
+                            "\\(wall/reflect\\), fix 3 \\(oneway\\): use quadrature "
+                            "lobatto 2"));
   Sim s;
   s.cmds(input("lobatto 2"));
   s.cmd("run 2000 post no");
   EXPECT_EQ(s.lmp->update->ntimestep, 2000);
+
+  // a thermostat that rescales velocities, at a time step too large for
+  // the hot liquid: only the time step is advised
+  const std::string hot =
+      error_of({"units lj", "atom_style atomic", "lattice fcc 0.8442",
+                "region box block 0 5 0 5 0 5", "create_box 1 box", "create_atoms 1 box",
+                "mass 1 1.0", "velocity all create 3.0 87287 loop geom", "pair_style lj/cut 2.5",
+                "pair_coeff 1 1 1.0 1.0 2.5", "timestep 0.02", "fix 1 all pe_jump",
+                "fix 2 all temp/berendsen 3.0 3.0 0.5", "thermo 0"},
+               "run 2000 post no");
+  EXPECT_THAT(hot, ContainsRegex("is unstable at step [0-9]+|atoms move more than half"));
+  EXPECT_THAT(hot, Not(ContainsRegex("reversed")));
 }
 
 /* ----------------------------------------------------------------------
