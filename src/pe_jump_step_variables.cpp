@@ -28,6 +28,20 @@ static bool word_char(char c)
   return std::isalnum(static_cast<unsigned char>(c)) || (c == '_');
 }
 
+// the number of variables: Variable::get_nvar() where LAMMPS has it (an
+// inline function), else the member nvar. The names and formulas come from
+// Info::get_variable_info(), which all supported versions export alike, so
+// that a plugin built for one version still loads into another far enough
+// to refuse it with its message.
+template <typename V> static auto variable_count(V *variable, int) -> decltype(variable->get_nvar())
+{
+  return variable->get_nvar();
+}
+template <typename V> static int variable_count(V *variable, long)
+{
+  return variable->nvar;
+}
+
 /* ----------------------------------------------------------------------
    the formula is split into words (letters, digits, _); a word that is a
    step-number keyword, a step-number function followed by '(', or v_name
@@ -71,16 +85,19 @@ std::vector<std::string> PEJump::step_number_variables(LAMMPS *lmp)
 {
   Variable *variable = lmp->input->variable;
   Info info(lmp);
-  int count = 0;
-  const auto names = info.get_variable_names(count);
-  std::vector<std::string> formulas(count), found;
+  const int count = variable_count(variable, 0);
+  std::vector<std::string> names(count), formulas(count), found;
   for (int i = 0; i < count; i++) {
     if (!variable->equalstyle(i) && !variable->atomstyle(i)) continue;
-    // " formula value" for equal-style variables (the value, last, has no
-    // blank: "(undefined)" or a number), " formula" for atom-style ones
+    // "Variable[  i]: name,  style = equal,  def = formula value": the
+    // value, last, has no blank ("(undefined)" or a number); atom-style
+    // variables have no value
     const std::string text = info.get_variable_info(i);
+    const size_t colon = text.find(": "), comma = text.find(',');
     const size_t def = text.find("def =");
-    if (def == std::string::npos) continue;
+    if ((colon == std::string::npos) || (comma == std::string::npos) || (def == std::string::npos))
+      continue;
+    names[i] = text.substr(colon + 2, comma - colon - 2);
     std::string formula = text.substr(def + 5);
     while (!formula.empty() && std::isspace(static_cast<unsigned char>(formula.back())))
       formula.pop_back();
