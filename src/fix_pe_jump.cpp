@@ -917,9 +917,7 @@ std::string FixPEJump::instability_advice() const
   // a velocity reversed by another fix (a reflecting wall, fix oneway) is
   // taken as an impulse beside the jump; the rules with interior nodes can
   // grow on many of them, lobatto 2 takes them as velocity Verlet does
-  const std::string reversing = (damping->velocities_changed() && !rule->only_end_nodes())
-      ? others->reversing_fixes()
-      : std::string();
+  const std::string reversing = rule->only_end_nodes() ? std::string() : others->reversing_fixes();
   return fmt::format(
       "The time step {} is beyond the stability limit of the fastest motion (for "
       "masses m joined by springs of stiffness k in a chain, dt < sqrt(m/k); "
@@ -927,9 +925,9 @@ std::string FixPEJump::instability_advice() const
       h_step,
       steps->adapts() ? "lower the adapt dtmin or eps" : "reduce it, or use the adapt keyword",
       reversing.empty() ? ""
-                        : fmt::format(". Velocities were reversed in this run by {}: use "
-                                      "quadrature lobatto 2, which takes such changes as fix "
-                                      "nve does",
+                        : fmt::format(". Velocities reversed by {} can also make the scheme "
+                                      "grow with this rule: use quadrature lobatto 2, which "
+                                      "takes them as fix nve does",
                                       reversing));
 }
 

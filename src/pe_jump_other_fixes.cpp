@@ -267,9 +267,9 @@ void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_
   if (names.empty()) return;
   error->warning(FLERR,
                  "Fix {}: variable(s) {} read the step number (step, elapsed, ramp(), "
-                 "vdisplace(), swiggle(), cwiggle()). Forces or parameters taken from them by "
-                 "{} are sampled by quadrature {} at nodes that see the step number of the "
-                 "step end: first order in the time step. Write such variables with time, "
+                 "vdisplace(), swiggle(), cwiggle()). Forces or parameters that {} may take "
+                 "from them are sampled by quadrature {} at nodes that see the step number of "
+                 "the step end: first order in the time step. Write such variables with time, "
                  "which every node sees at its own time, or use quadrature lobatto 2",
                  self->style, utils::join_words(names, ", "), fixes, rule_name);
 }

@@ -46,7 +46,6 @@ void ParasiticDamping::init(double damp_time, double dt, bool thermostats, bool 
     rate = 1.0 / (AUTO_STEPS * dt);
   on = (damp_time > 0.0) || (automatic && thermostats && (forcing || ever_changed));
   impulse = 0;
-  changed = false;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -62,7 +61,6 @@ int ParasiticDamping::take_impulse()
 
 void ParasiticDamping::impulse_anywhere(bool seen)
 {
-  if (seen) changed = true;
   if (seen && thermostatted) ever_changed = true;
   if (seen && automatic && thermostatted) on = true;
 }

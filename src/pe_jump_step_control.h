@@ -46,7 +46,6 @@ namespace PEJump {
     int take_impulse();                  // this rank's impulse flag, cleared
     void impulse_anywhere(bool seen);    // the flag reduced over the ranks
     bool active() const { return on; }
-    bool velocities_changed() const { return changed; }    // by another fix, this run
     double beta(double h) const;
 
     // whether velocities were changed by another fix beside a thermostat
@@ -56,7 +55,7 @@ namespace PEJump {
     void set_kicked(bool flag) { ever_changed = flag; }
 
    private:
-    bool automatic = true, on = false, thermostatted = false, changed = false;
+    bool automatic = true, on = false, thermostatted = false;
     bool ever_changed = false;
     double rate = 0.0;
     int impulse = 0;
