@@ -91,6 +91,17 @@ bool forces_beyond(Atom *atom, int i, int j, const std::function<void()> &comput
       return true;
   return false;
 }
+
+// the pair style that requested a list, if it computes from that list: a
+// run stopped by an error leaves a second request of the style behind, a
+// copy of its list that the style may not use (cutting that one cuts
+// nothing the style sees)
+Pair *style_using(NeighList *list)
+{
+  if (list->requestor_type != NeighList::PAIR) return nullptr;
+  auto *style = static_cast<Pair *>(list->requestor);
+  return (style && (style->list == list)) ? style : nullptr;
+}
 }    // namespace
 
 /* ---------------------------------------------------------------------- */
@@ -360,8 +371,8 @@ bool InteractionSplit::forces_off_pairs()
   bool beyond = false;
   for (auto &p : pairs) {
     NeighList *list = p.list;
-    auto *style = static_cast<Pair *>(list->requestor);
-    if ((list->requestor_type != NeighList::PAIR) || !style) continue;
+    Pair *style = style_using(list);
+    if (!style) continue;
     for (const auto &ij : probe_pairs(list)) {
       const int j = (ij.first < 0) ? -1 : (list->firstneigh[ij.first][ij.second] & NEIGHMASK);
       const RowCut cut(list, ij.first, ij.second, 1);
@@ -384,8 +395,8 @@ bool InteractionSplit::forces_off_pairs()
 
 bool InteractionSplit::additive(NeighList *list)
 {
-  auto *style = static_cast<Pair *>(list->requestor);
-  if ((list->requestor_type != NeighList::PAIR) || !style) return true;
+  Pair *style = style_using(list);
+  if (!style) return true;
   int atom_i = -1;
   for (int ii = 0; (ii < list->inum) && (atom_i < 0); ii++)
     if (list->numneigh[list->ilist[ii]] >= 2) atom_i = list->ilist[ii];

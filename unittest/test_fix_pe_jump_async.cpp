@@ -500,6 +500,38 @@ TEST(PEJumpAsync, ListsBuiltWhateverTheAtomsDoKeepTheTrajectory)
 }
 
 /* ----------------------------------------------------------------------
+   a run stopped by an error (caught, as the library interface and Python
+   do) leaves LAMMPS with a second perpetual list of the pair style, a
+   copy of the first, of which the style uses one: the pair probes cut the
+   other and took lj/cut for a style whose forces act beyond the pair (a
+   refusal at the next run). The next run equals that of a fresh instance
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, RunAfterACaughtErrorIsNotRefused)
+{
+  const std::vector<std::string> fix = {"group fast id 1:20", "fix 1 all pe_jump/async 5 fast",
+                                        "timestep 0.005", "thermo 0"};
+  Sim s;
+  lj_liquid(s);
+  s.cmds({"compute t all temp", "fix 2 all ave/time 1 1 1 c_t", "fix 3 all nve", "uncompute t"});
+  EXPECT_THROW(s.cmd("run 5 post no"), LAMMPS_NS::LAMMPSException);
+  s.cmds({"unfix 2", "unfix 3"});
+  s.cmds(fix);
+  std::string error = "no error";
+  try {
+    s.cmd("run 20 post no");
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    error = e.what();
+  }
+  EXPECT_EQ(error, "no error");
+  Sim fresh;
+  lj_liquid(fresh);
+  fresh.cmds(fix);
+  fresh.cmd("run 20 post no");
+  EXPECT_LT(max_diff(unwrapped_positions(s), unwrapped_positions(fresh)), 1e-13);
+}
+
+/* ----------------------------------------------------------------------
    bad input
 ------------------------------------------------------------------------- */
 
