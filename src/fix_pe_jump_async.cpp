@@ -176,6 +176,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
+  if (assign) assign->delete_clock_group();
   delete[] extlist;
   delete first;
   delete split;

@@ -15,10 +15,14 @@
 
 #include "atom.h"
 #include "comm.h"
+#include "compute.h"
+#include "dump.h"
 #include "error.h"
 #include "fix.h"
 #include "group.h"
 #include "modify.h"
+#include "neighbor.h"
+#include "output.h"
 #include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_interaction_split.h"
@@ -61,6 +65,26 @@ bool ClockAssignment::own_group() const
 void ClockAssignment::create_clock_group()
 {
   if (own_group()) group->find_or_create((std::string(fix->id) + "_fine_clock").c_str());
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::delete_clock_group() const
+{
+  if (!group || !modify || !output || !own_group()) return;
+  const std::string name = std::string(fix->id) + "_fine_clock";
+  const int igroup = group->find(name);
+  if (igroup <= 0) return;
+  for (const auto *ifix : modify->get_fix_list())
+    if (ifix->igroup == igroup) return;
+  for (const auto *icompute : modify->get_compute_list())
+    if (icompute->igroup == igroup) return;
+  for (const auto *idump : output->get_dump_list())
+    if (idump->igroup == igroup) return;
+  if ((atom->firstgroupname && (name == atom->firstgroupname)) ||
+      (neighbor->includegroup == igroup))
+    return;
+  group->assign(name + " delete");
 }
 
 /* ----------------------------------------------------------------------

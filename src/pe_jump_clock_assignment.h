@@ -39,7 +39,10 @@ namespace PEJump {
     ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, int layers, bool automatic);
 
     void create_clock_group();    // after the fix exists (buffer layers only)
-    void find_groups();           // at init: the group bits, again (groups may be deleted)
+    // the group goes with the fix (unfix) unless something else uses it; not
+    // when LAMMPS is torn down (the groups are gone first)
+    void delete_clock_group() const;
+    void find_groups();    // at init: the group bits, again (groups may be deleted)
     int clock_bit() const { return clockbit; }
 
     // at setup: (re)assign the buffer when the scheme starts, the layers

@@ -532,6 +532,33 @@ TEST(PEJumpAsync, RunAfterACaughtErrorIsNotRefused)
 }
 
 /* ----------------------------------------------------------------------
+   the fine-clock group of a fix with buffer layers goes with the fix: 40
+   cycles of fix, run, unfix with new fix IDs stopped at the 31st with
+   "Too many groups" (LAMMPS has 32). A group that something else uses
+   stays
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, FineClockGroupGoesWithTheFix)
+{
+  Sim s;
+  lj_liquid(s);
+  s.cmds({"group fast id 1:20", "timestep 0.005", "thermo 0"});
+  std::string error = "no error";
+  try {
+    for (int n = 1; n <= 40; n++)
+      s.cmds({fmt::format("fix f{} all pe_jump/async 5 fast buffer 1", n), "run 5 post no",
+              fmt::format("unfix f{}", n)});
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    error = e.what();
+  }
+  EXPECT_EQ(error, "no error");
+  EXPECT_LT(s.lmp->group->find("f40_fine_clock"), 0);
+  s.cmds({"fix kept all pe_jump/async 5 fast buffer 1", "run 5 post no",
+          "compute t kept_fine_clock temp", "unfix kept"});
+  EXPECT_GE(s.lmp->group->find("kept_fine_clock"), 0);
+}
+
+/* ----------------------------------------------------------------------
    bad input
 ------------------------------------------------------------------------- */
 
