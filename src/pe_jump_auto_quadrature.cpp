@@ -84,13 +84,19 @@ int AutoQuadrature::sum(NodeSampler &nodes, int mask, const AtomSet &set, const 
     memory->create(fnode, nfnode, 3, "pe_jump:fnode");
   }
 
-  // forces at node j of a level's rule: kept ones, or evaluated now
+  // forces at node j of a level's rule: kept ones (the end nodes, a node
+  // of a coarser level), or evaluated now. The rule decides, the same on
+  // every rank (a rank without atoms has no arrays: deciding from them, it
+  // alone evaluated forces while the others reduced the defect, a hang)
   double **f = atom->f;
+  const auto evaluate_now = [&](int level, int j) {
+    const double c = rules.rule(level).node[j];
+    return (c != 0.0) && (c != 1.0) && rules.added(level, j);
+  };
   const auto kept = [&](int level, int j) -> double ** {
     const double c = rules.rule(level).node[j];
     if (c == 0.0) return fstart;
-    if (c == 1.0) return fend;
-    return rules.added(level, j) ? nullptr : fnode;
+    return (c == 1.0) ? fend : fnode;
   };
   int level = 0, evaluated = 0;
   std::unique_ptr<NodeSampler::Keep> keep;
@@ -102,7 +108,7 @@ int AutoQuadrature::sum(NodeSampler &nodes, int mask, const AtomSet &set, const 
     });
     for (int j = 0; j < r.size(); j++) {
       double **fj = kept(level, j);
-      if (!fj) {
+      if (evaluate_now(level, j)) {
         if (!keep) keep = std::make_unique<NodeSampler::Keep>(nodes, NodeSampler::ALL_OWNED);
         nodes.evaluate_at((r.node[j] - 1.0) * h, v, set, mask);
         ++evaluated;

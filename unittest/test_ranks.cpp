@@ -209,6 +209,35 @@ TEST(PEJumpRanks, RestartWithAnEmptyRank)
   }
 }
 
+// quadrature auto with a rank that owns no atom (and so has no per-atom
+// arrays): the rank decided from its arrays to evaluate forces at a node
+// while the others reduced the step's energy defect, and the run hung in
+// its first step
+TEST(PEJumpRanks, AutoQuadratureWithAnEmptyRank)
+{
+  int me;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  std::vector<double> ke;
+  for (const int nranks : {1, 2}) {
+    MPI_Comm sub;
+    MPI_Comm_split(MPI_COMM_WORLD, me < nranks ? 0 : MPI_UNDEFINED, me, &sub);
+    if (sub == MPI_COMM_NULL) continue;
+    Sim s(sub);
+    s.cmds({"units lj", "atom_style atomic", fmt::format("processors {} 1 1", nranks),
+            "lattice fcc 0.8442", "region box block 0 8 0 4 0 4", "create_box 1 box",
+            "region half block 0 3.5 INF INF INF INF", "create_atoms 1 region half", "mass 1 1.0",
+            "velocity all create 1.0 4928", "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5",
+            "fix 1 all pe_jump quadrature auto 1e-8", "timestep 0.005", "thermo 0",
+            "run 20 post no"});
+    ke.push_back(s.eval("ke"));
+    MPI_Comm_free(&sub);
+  }
+  if (me == 0) {
+    ASSERT_EQ(ke.size(), 2u);
+    EXPECT_NEAR(ke[1], ke[0], 1e-12 * ke[0]);
+  }
+}
+
 int main(int argc, char **argv)
 {
   MPI_Init(&argc, &argv);
