@@ -169,6 +169,7 @@ int FixPEJump::setmask()
 void FixPEJump::init()
 {
   scheme->init(style);
+  guard->refuse_zero_skin(style, rule->only_end_nodes(), "quadrature " + rule->name());
   // with neigh_modify include LAMMPS clears and checks the include group
   // only; pe_jump/async handles the atoms outside it
   PEJump::FirstGroup(lmp).require_all(groupbit, style);

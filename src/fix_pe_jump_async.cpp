@@ -205,6 +205,7 @@ int FixPEJumpAsync::setmask()
 void FixPEJumpAsync::init()
 {
   scheme->init(style);
+  guard->refuse_zero_skin(style, false, "the coarse clock");
   others->sort(*sampler);
   sampler->refuse_velocity_forces(style, rule->name(), false);
   refuse_unsplittable();

@@ -136,6 +136,26 @@ bool StabilityGuard::rebuild_forced() const
 }
 
 /* ----------------------------------------------------------------------
+   with skin 0 the lists hold the pairs within the cutoff at the positions
+   of the last build only: every force evaluation elsewhere (quadrature
+   nodes, the step end for energy output, slow atoms at coarse nodes)
+   misses the pairs that came within the cutoff since, and the guard has no
+   distance to check against
+------------------------------------------------------------------------- */
+
+void StabilityGuard::refuse_zero_skin(const char *style, bool evaluations_at_builds,
+                                      const std::string &what) const
+{
+  if ((neighbor->skin > 0.0) || evaluations_at_builds) return;
+  error->all(FLERR,
+             "Fix {} needs a neighbor skin > 0 (neighbor {} ...): {} evaluates forces away from "
+             "the positions where LAMMPS builds the neighbor lists, where pairs would be "
+             "missed. Use a skin > 0, e.g. neighbor 0.3 bin{}",
+             style, neighbor->skin, what,
+             utils::strmatch(style, "^pe_jump/async") ? "" : ", or quadrature lobatto 2");
+}
+
+/* ----------------------------------------------------------------------
    the scheme is unstable if the jumps have grown by more than STOP_GROWTH
    since the first steps of the run (the first step where anything moves),
    or by more than HINT_GROWTH while moving atoms (or their jumps) by more

@@ -105,6 +105,10 @@ namespace PEJump {
     // atoms' positions (neigh_modify check no: every N steps, or a restart
     // file or a fix asks for it); with a distance check it is up to LAMMPS
     bool rebuild_forced() const;
+    // an error for a zero neighbor skin unless every force evaluation is at
+    // the positions where LAMMPS builds the lists (what, for the message)
+    void refuse_zero_skin(const char *style, bool evaluations_at_builds,
+                          const std::string &what) const;
 
     // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
     double excursion(const AtomSet &, const FreeFlight &, double **xhold, double lo,
