@@ -602,13 +602,11 @@ void FixPEJumpAsync::warn_output_between_nodes() const
     }
   // fixes that sample values at the end of steps every Nevery steps (fix
   // ave/time, ave/correlate, ave/atom, vector, print, ...)
-  for (auto *ifix : modify->get_fix_list()) {
-    bool samples = false;
-    for (const char *sampler : {"^ave/", "^vector", "^print"})
-      samples = samples || utils::strmatch(ifix->style, sampler);
-    if (samples && off_nodes(ifix->nevery, false))
-      what += fmt::format("{}fix {} ({})", what.empty() ? "" : ", ", ifix->id, ifix->style);
-  }
+  const std::string samplers = others->named([&](Fix *fix) {
+    return OtherFixes::style_is(fix, {"^ave/", "^vector", "^print"}) &&
+        off_nodes(fix->nevery, false);
+  });
+  if (!samplers.empty()) what += (what.empty() ? "" : ", ") + samplers;
   if (!what.empty())
     error->warning(FLERR,
                    "Fix {}: {} on steps that are not coarse nodes (every {} steps from step {}): "
@@ -737,16 +735,10 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 void FixPEJumpAsync::ahead_for_build()
 {
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
-  const PEJump::FreeFlight vhalf = free_flight();
-  double **x = atom->x;
-  const double *tpos = clocks->times();
   clocks->moving_at(h_step);
-  clocks->catch_up_all(vhalf, assign->moving());
+  clocks->catch_up_all(free_flight(), assign->moving());
   if (rest == 0.0) return;
-  group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
-    if (tpos[i] == AsyncClocks::MOVING)
-      for (int k = 0; k < 3; k++) x[i][k] += rest * vhalf(i, k);
-  });
+  move_moving(rest);
   build_ahead = rest;
 }
 
@@ -754,16 +746,26 @@ void FixPEJumpAsync::ahead_for_build()
 
 void FixPEJumpAsync::back_from_build()
 {
+  move_moving(-build_ahead);
+  clocks->moving_at(rule->node[rule->primary()] * h_step);
+  build_ahead = 0.0;
+  comm->forward_comm();
+}
+
+/* ----------------------------------------------------------------------
+   free flight over dt of the atoms of the group that move with the fine
+   steps (their clock time is MOVING)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::move_moving(double dt)
+{
   const PEJump::FreeFlight vhalf = free_flight();
   double **x = atom->x;
   const double *tpos = clocks->times();
   group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
     if (tpos[i] == AsyncClocks::MOVING)
-      for (int k = 0; k < 3; k++) x[i][k] -= build_ahead * vhalf(i, k);
+      for (int k = 0; k < 3; k++) x[i][k] += dt * vhalf(i, k);
   });
-  clocks->moving_at(rule->node[rule->primary()] * h_step);
-  build_ahead = 0.0;
-  comm->forward_comm();
 }
 
 /* ----------------------------------------------------------------------

@@ -131,6 +131,7 @@ class FixPEJumpAsync : public Fix {
   void change_clocks();      // a dynamic fast group or fast auto, at coarse nodes
   void ahead_for_build();    // to the step end for lists built whatever the atoms do
   void back_from_build();
+  void move_moving(double dt);    // free flight of the atoms that move on fine steps
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);
   void choose_fast(std::vector<int> &chosen) const;
   void restart_jumps(const std::vector<int> &to_fine, double **f);

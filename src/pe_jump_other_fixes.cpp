@@ -200,9 +200,7 @@ void OtherFixes::refuse_shared_atoms() const
 
 bool OtherFixes::steps_own_clock(const Fix *fix)
 {
-  for (const char *style : {"^smd", "^ti/spring", "^restrain"})
-    if (utils::strmatch(fix->style, style)) return true;
-  return false;
+  return style_is(fix, {"^smd", "^ti/spring", "^restrain"});
 }
 
 /* ----------------------------------------------------------------------
@@ -211,10 +209,27 @@ bool OtherFixes::steps_own_clock(const Fix *fix)
 
 bool OtherFixes::replaces_forces(const Fix *fix)
 {
-  for (const char *style :
-       {"^setforce", "^aveforce", "^freeze", "^lineforce", "^planeforce", "^enforce2d"})
-    if (utils::strmatch(fix->style, style)) return true;
+  return style_is(fix,
+                  {"^setforce", "^aveforce", "^freeze", "^lineforce", "^planeforce", "^enforce2d"});
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool OtherFixes::style_is(const Fix *fix, std::initializer_list<const char *> patterns)
+{
+  for (const char *pattern : patterns)
+    if (utils::strmatch(fix->style, pattern)) return true;
   return false;
+}
+
+/* ---------------------------------------------------------------------- */
+
+std::string OtherFixes::named(const std::function<bool(Fix *)> &keep) const
+{
+  std::vector<std::string> list;
+  for (auto *ifix : modify->get_fix_list())
+    if (keep(ifix)) list.push_back(fmt::format("fix {} ({})", ifix->id, ifix->style));
+  return utils::join_words(list, ", ");
 }
 
 /* ---------------------------------------------------------------------- */
@@ -235,11 +250,9 @@ bool OtherFixes::step_observed() const
 
 std::string OtherFixes::reversing_fixes() const
 {
-  std::string list;
-  for (auto *ifix : modify->get_fix_list())
-    if (utils::strmatch(ifix->style, "^wall/reflect") || utils::strmatch(ifix->style, "^oneway"))
-      list += fmt::format("{}fix {} ({})", list.empty() ? "" : ", ", ifix->id, ifix->style);
-  return list;
+  return named([](Fix *fix) {
+    return style_is(fix, {"^wall/reflect", "^oneway"});
+  });
 }
 
 /* ----------------------------------------------------------------------
@@ -251,17 +264,13 @@ void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_
                                   bool only_end_nodes) const
 {
   if (only_end_nodes || (comm->me != 0)) return;
-  std::string fixes;
-  for (auto *ifix : modify->get_fix_list()) {
-    // (fix setforce and aveforce, which also act at every node, mostly
-    // hold atoms with constants: not named, to keep the warning meaningful)
-    const bool every_node = utils::strmatch(ifix->style, "^adapt");
-    bool impulse = false;
-    for (const char *style : {"^addforce", "^efield", "^gravity", "^indent", "^wall/"})
-      impulse = impulse || utils::strmatch(ifix->style, style);
-    if (every_node || (impulse && !primary_at_end))
-      fixes += fmt::format("{}fix {} ({})", fixes.empty() ? "" : ", ", ifix->id, ifix->style);
-  }
+  // (fix setforce and aveforce, which also act at every node, mostly hold
+  // atoms with constants: not named, to keep the warning meaningful)
+  const std::string fixes = named([&](Fix *fix) {
+    return style_is(fix, {"^adapt"}) ||
+        (!primary_at_end &&
+         style_is(fix, {"^addforce", "^efield", "^gravity", "^indent", "^wall/"}));
+  });
   if (fixes.empty()) return;
   const auto names = step_number_variables(lmp);
   if (names.empty()) return;

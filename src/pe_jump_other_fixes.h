@@ -16,6 +16,8 @@
 
 #include "fix.h"
 
+#include <functional>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -84,6 +86,11 @@ namespace PEJump {
 
     static bool steps_own_clock(const class Fix *);
     static bool replaces_forces(const Fix *);
+    // the fix's style matches one of the patterns (utils::strmatch)
+    static bool style_is(const Fix *, std::initializer_list<const char *> patterns);
+    // the fixes for which keep(fix) holds, for messages: "fix 2 (wall/reflect),
+    // fix 3 (oneway)" (empty if none)
+    std::string named(const std::function<bool(Fix *)> &keep) const;
 
    private:
     Fix *self;

@@ -48,7 +48,7 @@ template <typename V> static int variable_count(V *variable, long)
    of a known variable reads the step number
 ------------------------------------------------------------------------- */
 
-bool PEJump::reads_step_number(const std::string &formula, const std::vector<std::string> &known)
+static bool reads_step_number(const std::string &formula, const std::vector<std::string> &known)
 {
   static const std::vector<std::string> keywords = {"step", "elapsed", "elaplong"};
   static const std::vector<std::string> functions = {"ramp", "vdisplace", "swiggle", "cwiggle"};

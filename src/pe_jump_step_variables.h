@@ -27,10 +27,6 @@ namespace PEJump {
   // (v_name). Read from the formulas' text; nothing is evaluated.
   std::vector<std::string> step_number_variables(LAMMPS *);
 
-  // the same test on one formula, given the names of the variables known
-  // to read the step number
-  bool reads_step_number(const std::string &formula, const std::vector<std::string> &known);
-
 }    // namespace PEJump
 }    // namespace LAMMPS_NS
 
