@@ -902,8 +902,11 @@ void FixPEJumpAsync::choose_fast(std::vector<int> &chosen) const
    the coarse clock) start their new clock with the initial kick of the
    scheme, [v]^n = h_new F(q^n)/m, with f the forces at the node (the
    smooth jump of the new step; whatever parasitic jump the old clock
-   carried is dropped), less the mass-weighted mean of the change, so
-   that sum m [v] stays what it was. Node velocities are untouched.
+   carried is dropped). Node velocities are untouched, and with them the
+   momentum. The jumps are not shifted to keep sum m [v]: a common shift
+   of the changed jumps is a parasitic jump of its own (for a single atom
+   it undoes the restart), and atoms that change clock at every node
+   pumped it up to a first-order error.
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
@@ -911,28 +914,10 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
   AtomList changed;
   for (int i = 0; i < atom->nlocal; i++)
     if (to_fine[i] && (atom->mask[i] & groupbit)) changed.push_back(i);
-  double **jump = scheme->jump();
-  const double *rmass = atom->rmass;
-  const double *mass = atom->mass;
-  const int *type = atom->type;
-  std::vector<double> before;    // the jumps of the old clock
-  for (const int i : changed) before.insert(before.end(), jump[i], jump[i] + 3);
   const double fine = update->dt, coarse = clocks->steps() * update->dt;
   scheme->start(group_atoms(&changed), f, 1.0, [&](int i) {
     return (to_fine[i] > 0) ? fine : coarse;
   });
-  double local[4] = {0.0, 0.0, 0.0, 0.0};    // sum m d[v], sum m
-  for (size_t n = 0; n < changed.size(); n++) {
-    const int i = changed[n];
-    const double m = rmass ? rmass[i] : mass[type[i]];
-    for (int k = 0; k < 3; k++) local[k] += m * (jump[i][k] - before[3 * n + k]);
-    local[3] += m;
-  }
-  double sum[4];
-  MPI_Allreduce(local, sum, 4, MPI_DOUBLE, MPI_SUM, world);
-  if (!(sum[3] > 0.0)) return;
-  for (const int i : changed)
-    for (int k = 0; k < 3; k++) jump[i][k] -= sum[k] / sum[3];
 }
 
 /* ----------------------------------------------------------------------
