@@ -103,7 +103,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
   FACC = state->add("facc", 3, 0.0);
   FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
-  assign = new ClockAssignment(lmp, this, arg[4], opts.buffer_layers, opts.fast_auto > 0.0);
+  assign = new ClockAssignment(lmp, this, arg[4], {opts.buffer_layers, opts.buffer_reach},
+                               opts.fast_auto > 0.0);
   classes = new PEJump::ClockClasses(lmp, *state);
   clocks = new AsyncClocks(lmp, *state, nfine);
   split = new InteractionSplit(lmp, groupbit, assign->clock_bit());
@@ -545,6 +546,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   scheme->fresh = 0;
   changes_seen = 0;
   opened_ahead = 0;
+  assign->warn_if_made_static();
   check_clocks();
 
   grow_work();
@@ -702,6 +704,8 @@ void FixPEJumpAsync::setup_pre_reverse(int eflag, int vflag)
 
 void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 {
+  if (scheme->awaits_setup())
+    scheme->refuse_changes_without_setup(style, group_atoms(), assign->changed());
   if (reinit_pending) start_scheme(nullptr, false);
   reinit_pending = 0;
   h_step = update->dt;
@@ -930,7 +934,17 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   catch_up_all();
   if (with_start) {
-    if (!clocks->at_coarse_node()) hand_over_impulses();
+    if (!clocks->at_coarse_node()) {
+      if (comm->me == 0)
+        error->warning(FLERR,
+                       "Fix {}: the two-step scheme restarts inside a coarse step ({} of {} fine "
+                       "steps done): the slow atoms miss the impulse of the interactions among "
+                       "them over those steps, an error of first order in the time step. Change "
+                       "the time step, masses, positions, velocities, atoms or fixes at coarse "
+                       "nodes (after a multiple of K steps)",
+                       style, clocks->done(), clocks->steps());
+      hand_over_impulses();
+    }
     clocks->begin_coarse();
     double **facc = state->vec(FACC);
     for (int i = 0; i < atom->nlocal; i++)
@@ -1500,16 +1514,18 @@ int FixPEJumpAsync::maxsize_restart()
 /* ----------------------------------------------------------------------
    global state: whether the two-step scheme runs, with which rule, the
    evaluations so far, (two values unused), K and the position inside the
-   coarse step, the buffer layers and the atoms on the fine clock
+   coarse step, the buffer layers and the atoms on the fine clock, the
+   census, the buffer's reach
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::write_restart(FILE *fp)
 {
-  // (+ 2: the census follows)
-  double list[NGLOBAL] = {((scheme->started > 0) ? 1.0 : 0.0) + 2.0,
-                          static_cast<double>(rule->family()), static_cast<double>(rule->points()),
-                          evals_total};
-  assign->save(&list[9], &list[4]);
+  // (+ 2: the census follows, + 4: and the buffer's reach, + 8: the fast
+  // group is dynamic)
+  double list[NGLOBAL] = {
+      ((scheme->started > 0) ? 1.0 : 0.0) + 2.0 + 4.0 + (assign->dynamic_group() ? 8.0 : 0.0),
+      static_cast<double>(rule->family()), static_cast<double>(rule->points()), evals_total};
+  assign->save(&list[9], &list[4], &list[23]);
   clocks->save(&list[6]);
   scheme->save_census(&list[12]);
   if (comm->me == 0) {
@@ -1527,6 +1543,14 @@ void FixPEJumpAsync::restart(char *buf)
   const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
       (static_cast<int>(list[2]) == rule->points());
   const int head = static_cast<int>(list[0]);
+  // inside a coarse step, as for another K below
+  if (!same_rule && ((head & 1) != 0) && (static_cast<int>(list[7]) != 0))
+    error->all(FLERR,
+               "Fix pe_jump/async: the restart file was written inside a coarse step ({} of {} "
+               "fine steps done) with another quadrature, which this one cannot continue: read "
+               "it with the quadrature of the file, or write restart files at coarse nodes "
+               "(after multiples of K steps)",
+               static_cast<int>(list[7]), static_cast<int>(list[6]));
   scheme->started = ((head & 1) != 0) && same_rule;
   evals_total = list[3];
   if (head >= 2) scheme->load_census(&list[12]);
@@ -1553,7 +1577,8 @@ void FixPEJumpAsync::restart(char *buf)
     scheme->started = 0;
     return;
   }
-  assign->restore(&list[9], &list[4]);
+  assign->restore(&list[9], &list[4], (head >= 6) ? &list[23] : nullptr);
+  if (head & 8) assign->restored_from_dynamic();
 }
 
 /* ----------------------------------------------------------------------

@@ -162,8 +162,9 @@ class FixPEJumpAsync : public Fix {
   void show_classes();    // vector_atom follows the state table
   // values of the global restart state: 12, then the census of the last
   // run's end (TwoStep::NCENSUS), told by the first value (2 or 3; files
-  // of earlier versions: 0 or 1, without it)
-  static constexpr int NGLOBAL = 23;
+  // of earlier versions: 0 or 1, without it), then the buffer's reach (first
+  // value 6 or 7; earlier files: without it)
+  static constexpr int NGLOBAL = 24;
 };
 
 }    // namespace LAMMPS_NS

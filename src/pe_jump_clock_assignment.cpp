@@ -35,18 +35,30 @@ using namespace LAMMPS_NS::PEJump;
 
 /* ---------------------------------------------------------------------- */
 
-ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int nlayers,
+ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, Buffer layers,
                                  bool chooses) :
     Pointers(lmp),
-    fix(owner), fast_group(fast), layers(nlayers), finebit(0), clockbit(0), dynamic(false),
-    automatic(chooses),
-    saved_layers(-1), saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0}, tally{0, 0, 0},
-    reverse_flags(nullptr)
+    fix(owner), fast_group(fast), buffer(layers), finebit(0), clockbit(0), dynamic(false),
+    automatic(chooses), file_dynamic(false), saved_buffer{-1, 0.0},
+    saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0}, tally{0, 0, 0}, reverse_flags(nullptr)
 {
   const int ifast = group->find(fast_group);
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", fast_group);
   finebit = clockbit = group->bitmask[ifast];    // own clock group: see find_groups()
   dynamic = group->dynamic[ifast] != 0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void ClockAssignment::warn_if_made_static()
+{
+  if (file_dynamic && !dynamic && (comm->me == 0))
+    error->warning(FLERR,
+                   "Fix pe_jump/async: its fast group {} was dynamic when the restart file was "
+                   "written, and read_restart restores it as a static group: give its group "
+                   "dynamic command again after read_restart for the fine clock to follow it",
+                   fast_group);
+  file_dynamic = false;
 }
 
 /* ----------------------------------------------------------------------
@@ -57,7 +69,7 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, int 
 
 bool ClockAssignment::own_group() const
 {
-  return (layers > 0) || dynamic || automatic;
+  return (buffer.layers > 0) || dynamic || automatic;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -150,8 +162,8 @@ bool ClockAssignment::assign_buffer(bool started, InteractionSplit &split)
   // buffer atoms would; a dynamic group or fast auto is followed at
   // coarse nodes)
   const bool grown = !dynamic && !automatic && started && (fast_off_clock() > 0);
-  const bool redo = own_group() && (!started || (layers != saved_layers) || grown);
-  saved_layers = layers;
+  const bool redo = own_group() && (!started || (buffer != saved_buffer) || grown);
+  saved_buffer = buffer;
   if (!redo) return false;
   assign(split);
   return true;
@@ -175,10 +187,10 @@ void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *ch
   fast_signature(fast_seen, chosen);
   // each layer adds the slow partners of the fine clock; stop early when a
   // layer adds no atom (everything reachable is on the fine clock)
-  for (int layer = 0; layer < layers; layer++) {
+  for (int layer = 0; layer < buffer.layers; layer++) {
     split.build();
     // the partners at the current positions, whatever the age of the lists
-    split.mark_fine_partners(participant);
+    split.mark_fine_partners(participant, buffer.reach);
     gather(participant);
     int added = 0;
     for (int i = 0; i < atom->nlocal; i++)
@@ -397,9 +409,10 @@ bool ClockAssignment::find_moving(const InteractionSplit &split, AsyncClocks &cl
 
 /* ---------------------------------------------------------------------- */
 
-void ClockAssignment::save(double *list, double *seen) const
+void ClockAssignment::save(double *list, double *seen, double *reach) const
 {
-  list[0] = saved_layers;
+  list[0] = saved_buffer.layers;
+  *reach = saved_buffer.reach;
   list[1] = saved_clock[0];
   list[2] = saved_clock[1];
   seen[0] = fast_seen[0];
@@ -408,9 +421,9 @@ void ClockAssignment::save(double *list, double *seen) const
 
 /* ---------------------------------------------------------------------- */
 
-void ClockAssignment::restore(const double *list, const double *seen)
+void ClockAssignment::restore(const double *list, const double *seen, const double *reach)
 {
-  saved_layers = static_cast<int>(list[0]);
+  saved_buffer = {static_cast<int>(list[0]), reach ? *reach : 0.0};
   saved_clock[0] = list[1];
   saved_clock[1] = list[2];
   fast_seen[0] = seen[0];

@@ -36,7 +36,14 @@ namespace PEJump {
   class ClockAssignment : protected Pointers {
    public:
     // automatic: the fix adds atoms of its own choice to the fast group
-    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, int layers, bool automatic);
+    // the buffer: layers of slow partners, pairs closer than reach (0: the
+    // pair style's cutoff)
+    struct Buffer {
+      int layers;
+      double reach;
+      bool operator!=(const Buffer &o) const { return (layers != o.layers) || (reach != o.reach); }
+    };
+    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, Buffer, bool automatic);
 
     void create_clock_group();    // after the fix exists (buffer layers only)
     // the group goes with the fix (unfix) unless something else uses it; not
@@ -59,6 +66,12 @@ namespace PEJump {
     bool due(const std::vector<int> *chosen, bigint node, int steps);
     bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
     bool follows_group() const { return dynamic || automatic; }
+    bool dynamic_group() const { return dynamic; }
+    // the fast group was dynamic when the restart file was written: a
+    // warning at the next setup if it is static now (read_restart restores
+    // groups without their dynamic definition)
+    void restored_from_dynamic() { file_dynamic = true; }
+    void warn_if_made_static();
     // the clock changes of a run (atoms, coarse nodes with a change, coarse
     // nodes looked at), reported in the log at its end, and counted anew
     void report(const char *style);
@@ -80,12 +93,13 @@ namespace PEJump {
     AtomList slow_atoms;      // the atoms of the group on the coarse clock
 
     // restart: buffer layers and fine-clock atoms (number, ID hash) of
-    // the last run (3 values in list), and the fast group at the last
+    // the last run (3 values in list), the fast group at the last
     // assignment (number, ID hash: 2 values in seen), which tells whether
     // a dynamic group changed when it is next evaluated (seen = {0, 0}
-    // from older files: the group counts as changed)
-    void save(double *list, double *seen) const;
-    void restore(const double *list, const double *seen);
+    // from older files: the group counts as changed), and the buffer's
+    // reach (nullptr from older files: 0)
+    void save(double *list, double *seen, double *reach) const;
+    void restore(const double *list, const double *seen, const double *reach);
 
     // communication of the clock bit of the ghosts (forward) and of flags
     // set on ghosts (reverse): the fix passes its calls on
@@ -99,10 +113,12 @@ namespace PEJump {
    private:
     Fix *fix;
     std::string fast_group;
-    int layers, finebit, clockbit;
+    Buffer buffer;
+    int finebit, clockbit;
     bool dynamic;             // the fast group is dynamic
     bool automatic;           // the fix adds atoms to the fast group
-    int saved_layers;         // buffer layers of the last run (or restart file)
+    bool file_dynamic;        // the restart file's fast group was dynamic
+    Buffer saved_buffer;      // of the last run (or restart file)
     double saved_clock[2];    // fine-clock atoms of the last run: number, ID hash
     double fast_seen[2];      // fast group at the last assignment: number, ID hash
     enum { ATOMS, CHANGED, NODES };

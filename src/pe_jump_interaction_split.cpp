@@ -565,25 +565,27 @@ void InteractionSplit::mark_interface(std::vector<int> &flag) const
 }
 
 /* ----------------------------------------------------------------------
-   atoms i and j (owned or ghost) closer than the pair style's cutoff
+   atoms i and j (owned or ghost) closer than the pair style's cutoff, and
+   than reach if reach > 0
 ------------------------------------------------------------------------- */
 
-bool InteractionSplit::within_cutoff(int i, int j) const
+bool InteractionSplit::within_cutoff(int i, int j, double reach) const
 {
   double **x = atom->x;
   const int *type = atom->type;
   const double dx = x[i][0] - x[j][0];
   const double dy = x[i][1] - x[j][1];
   const double dz = x[i][2] - x[j][2];
-  return dx * dx + dy * dy + dz * dz < force->pair->cutsq[type[i]][type[j]];
+  const double rsq = dx * dx + dy * dy + dz * dz;
+  return (rsq < force->pair->cutsq[type[i]][type[j]]) && ((reach <= 0.0) || (rsq < reach * reach));
 }
 
 /* ----------------------------------------------------------------------
    the atoms of the FINE interactions: all pairs of the lists, or (acting)
-   only those closer than the cutoff
+   only those closer than the cutoff (and than reach, if reach > 0)
 ------------------------------------------------------------------------- */
 
-void InteractionSplit::mark_fine(std::vector<int> &flag, bool acting) const
+void InteractionSplit::mark_fine(std::vector<int> &flag, bool acting, double reach) const
 {
   flag.assign(atom->nlocal + atom->nghost, 0);
   for (const auto &p : pairs) {
@@ -591,7 +593,7 @@ void InteractionSplit::mark_fine(std::vector<int> &flag, bool acting) const
     for (const int i : part.ilist) {
       for (int jj = 0; jj < part.numneigh[i]; jj++) {
         const int j = part.firstneigh[i][jj] & NEIGHMASK;
-        if (!acting || within_cutoff(i, j)) flag[i] = flag[j] = 1;
+        if (!acting || within_cutoff(i, j, reach)) flag[i] = flag[j] = 1;
       }
     }
   }

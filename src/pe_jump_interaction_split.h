@@ -96,8 +96,12 @@ namespace PEJump {
     // the same for the interactions of the FINE subset that act at the
     // current positions: bonded ones, and pairs closer than the pair
     // style's cutoff (not those within the skin only), so that the result
-    // does not depend on when the lists were built
-    void mark_fine_partners(std::vector<int> &flag) const { mark_fine(flag, true); }
+    // does not depend on when the lists were built; with reach > 0 only
+    // pairs closer than reach (bonded ones whatever their length)
+    void mark_fine_partners(std::vector<int> &flag, double reach = 0.0) const
+    {
+      mark_fine(flag, true, reach);
+    }
 
    private:
     int groupbit, finebit;
@@ -153,8 +157,9 @@ namespace PEJump {
     TopoList topo[4];
 
     int klass(const int *atoms, int n) const;
-    void mark_fine(std::vector<int> &flag, bool acting) const;
-    bool within_cutoff(int i, int j) const;    // needs a pair style
+    void mark_fine(std::vector<int> &flag, bool acting, double reach = 0.0) const;
+    // closer than the pair style's cutoff, and than reach if > 0
+    bool within_cutoff(int i, int j, double reach = 0.0) const;    // needs a pair style
     void split_pairs(PairList &);
     void split_topology(TopoList &);
   };

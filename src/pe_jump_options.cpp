@@ -30,7 +30,7 @@ using namespace LAMMPS_NS::PEJump;
 Options::Options() :
     family(Quadrature::LEGENDRE), npoints(1), init_style(KICK), sample_mask(ForceSampler::ALL),
     auto_tol(0.0), adapt_eps(0.0), adapt_dtmin(0.0), adapt_dtmax(0.0), compensate(-1),
-    damp_time(-1.0), buffer_layers(0), fast_auto(0.0)
+    damp_time(-1.0), buffer_layers(0), buffer_reach(0.0), fast_auto(0.0)
 {
 }
 
@@ -160,7 +160,13 @@ int Options::clock_keyword(LAMMPS *lmp, const char *style, int narg, char **arg,
     if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " buffer", lmp->error);
     buffer_layers = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
     if (buffer_layers < 0) lmp->error->all(FLERR, "Fix {} buffer needs N >= 0", style);
-    return iarg + 2;
+    if ((iarg + 2 >= narg) || (strcmp(arg[iarg + 2], "within") != 0)) return iarg + 2;
+    if (iarg + 4 > narg) utils::missing_cmd_args(FLERR, fix + " buffer N within", lmp->error);
+    buffer_reach = utils::numeric(FLERR, arg[iarg + 3], false, lmp);
+    if (!(buffer_reach > 0.0))
+      lmp->error->all(FLERR, "Fix {} buffer N within D needs D > 0 (a distance), got {}", style,
+                      arg[iarg + 3]);
+    return iarg + 4;
   }
   if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " fast", lmp->error);
   if (strcmp(arg[iarg + 1], "auto") != 0)

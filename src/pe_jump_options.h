@@ -33,7 +33,8 @@ namespace PEJump {
     int compensate;                                // -1: on with adapt
     double damp_time;                              // -1: auto
     int buffer_layers;                             // pe_jump/async only
-    double fast_auto;    // pe_jump/async fast auto: fraction of the skin, 0 if off
+    double buffer_reach;    // buffer pairs closer than this (0: the pair cutoff)
+    double fast_auto;       // pe_jump/async fast auto: fraction of the skin, 0 if off
 
     Options();
 

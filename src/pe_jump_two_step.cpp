@@ -31,7 +31,7 @@ using namespace LAMMPS_NS::PEJump;
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
     Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}, at_end(),
-    minimized(false)
+    minimized(false), pending_setup(false)
 {
   at_end.atoms = -1;    // no run yet
   JUMP = state.add("jump", 3, 0.0);
@@ -119,6 +119,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
   }
   at_end.atoms = -1;
   minimized = false;
+  pending_setup = false;
 
   // velocities that are not finite (a velocity command gone wrong, e.g.
   // velocity scale to a negative temperature) would only show up later
@@ -271,6 +272,25 @@ void TwoStep::end_run(const AtomSet &set, const NodeSampler::Tallied &energy)
 {
   mark_all(set);
   at_end = census(set, energy);
+  pending_setup = true;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::refuse_changes_without_setup(const char *style, const AtomSet &set,
+                                           bool clocks_changed)
+{
+  pending_setup = false;
+  // (the time step may change: the scheme takes any step sequence)
+  std::string why = changed_since_run(census(set, {false, 0.0, 0.0}), false);
+  if (why.empty() && (velocity_change(set, false) != 0))
+    why = "velocities were changed since the last run";
+  if (why.empty() && clocks_changed) why = "the atoms on the fine clock changed since the last run";
+  if (!why.empty())
+    error->all(FLERR,
+               "Fix {}: {}, and this run starts with 'pre no', which skips the fix's check at "
+               "the start of a run: use run with pre yes (the default)",
+               style, why);
 }
 
 /* ---------------------------------------------------------------------- */

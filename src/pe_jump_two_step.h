@@ -67,6 +67,12 @@ namespace PEJump {
     // of the group (atoms, positions, masses, time step, the potential
     // energy tallied at the end), for the next run to compare
     void end_run(const AtomSet &, const NodeSampler::Tallied &energy);
+    // "run N pre no" starts a run without setup(), so without the check
+    // above: at the first step of such a run, an error if the state of
+    // the last run no longer fits (changed velocities included, and
+    // clocks_changed: the atoms on the fine clock of pe_jump/async)
+    bool awaits_setup() const { return pending_setup; }
+    void refuse_changes_without_setup(const char *style, const AtomSet &, bool clocks_changed);
     // an energy minimization moves the atoms (Fix::min_setup()): the state
     // belongs to the old positions, the next run restarts the scheme
     void atoms_minimized() { minimized = true; }
@@ -155,8 +161,9 @@ namespace PEJump {
       NodeSampler::Tallied energy;
     };
     Census census(const AtomSet &, const NodeSampler::Tallied &) const;    // global
-    Census at_end;     // at the end of the last run (atoms -1: none)
-    bool minimized;    // an energy minimization since the last run
+    Census at_end;         // at the end of the last run (atoms -1: none)
+    bool minimized;        // an energy minimization since the last run
+    bool pending_setup;    // a run ended, and no setup() since
     std::string changed_since_run(const Census &now, bool new_step_restarts) const;
   };
 

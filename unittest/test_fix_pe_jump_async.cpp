@@ -709,6 +709,50 @@ TEST(PEJumpAsync, BufferLayersJoinTheFineClock)
 }
 
 /* ----------------------------------------------------------------------
+   buffer N within D: the layers take the pair partners closer than D only
+   (one atom of a 2d hex lattice, spacing 1.114, lj/cut 2.5: its 6 nearest
+   neighbours, against 18 within the cutoff); a restart file tells the
+   reach, and a fix defined with another one takes the layers anew
+------------------------------------------------------------------------- */
+
+namespace {
+void hex_lattice(Sim &s)
+{
+  s.cmds({"units lj", "dimension 2", "atom_style atomic", "atom_modify map array",
+          "lattice hex 0.93", "region box block 0 10 0 6 -0.5 0.5", "create_box 1 box",
+          "create_atoms 1 box", "mass 1 1.0", "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0",
+          "neighbor 0.3 bin", "group fast id 55", "fix 2d all enforce2d", "thermo 0"});
+}
+}    // namespace
+
+TEST(PEJumpAsync, BufferWithinAReachTakesTheNearPartnersOnly)
+{
+  const auto fine_clock = [](Sim &s) {
+    return s.vec("1", 7) + s.vec("1", 8);
+  };
+  for (const std::string within : {"", " within 1.2", " within 2.0", " within 9.0"}) {
+    Sim s;
+    hex_lattice(s);
+    s.cmds({"fix 1 all pe_jump/async 5 fast buffer 1" + within, "run 0 post no"});
+    const double expected = within.empty() ? 19.0 : (within == " within 1.2") ? 7.0 : 13.0;
+    // (a reach beyond the cutoff is the cutoff)
+    EXPECT_EQ(fine_clock(s), (within == " within 9.0") ? 19.0 : expected) << within;
+  }
+  // the reach goes with the restart file
+  for (const std::string within : {" within 1.2", ""}) {
+    Sim s;
+    hex_lattice(s);
+    s.cmds({"fix 1 all pe_jump/async 5 fast buffer 1 within 1.2", "run 10 post no",
+            "write_restart pe_jump_reach.restart", "clear", "read_restart pe_jump_reach.restart",
+            "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0", "neighbor 0.3 bin",
+            "fix 2d all enforce2d", "thermo 0", "fix 1 all pe_jump/async 5 fast buffer 1" + within,
+            "run 0 post no"});
+    std::remove("pe_jump_reach.restart");
+    EXPECT_EQ(fine_clock(s), within.empty() ? 19.0 : 7.0) << within;
+  }
+}
+
+/* ----------------------------------------------------------------------
    the paper's wave setting h_S = dx, K = 10 resonates at the interface
    (the period-2 mode of the first slow atom grows 5.4 % per coarse step);
    with one buffer layer it is stable and keeps the pseudo-energy
@@ -1307,15 +1351,30 @@ namespace {
 std::vector<double> toggled_chain(const std::string &integrator, double h, int steps)
 {
   Sim s;
-  s.cmds({"units lj", "atom_style bond", "boundary f f f", "region box block -10 10 -10 10 -10 10",
-          "create_box 1 box bond/types 1 extra/bond/per/atom 2", "mass 1 1.0",
-          "create_atoms 1 single 0.0 0.0 0.0", "create_atoms 1 single 1.2 0.1 0.0",
-          "create_atoms 1 single 2.1 0.9 0.3", "create_bonds single/bond 1 1 2",
-          "create_bonds single/bond 1 2 3", "bond_style harmonic", "bond_coeff 1 5.0 1.0",
-          "velocity all set 0.0 0.0 0.0", "set atom 1 vx 0.1", "set atom 2 vx -0.2 vy 0.3",
-          "set atom 3 vx 0.05 vy -0.1 vz 0.2", "comm_modify cutoff 3.0", "neighbor 0.5 bin",
-          "variable inf atom (id==1)*(step%10<5)", "group fast dynamic all var inf every 5",
-          "timestep " + std::to_string(h), "fix 1 all " + integrator, "thermo 0",
+  s.cmds({"units lj",
+          "atom_style bond",
+          "boundary f f f",
+          "region box block -10 10 -10 10 -10 10",
+          "create_box 1 box bond/types 1 extra/bond/per/atom 2",
+          "mass 1 1.0",
+          "create_atoms 1 single 0.0 0.0 0.0",
+          "create_atoms 1 single 1.2 0.1 0.0",
+          "create_atoms 1 single 2.1 0.9 0.3",
+          "create_bonds single/bond 1 1 2",
+          "create_bonds single/bond 1 2 3",
+          "bond_style harmonic",
+          "bond_coeff 1 5.0 1.0",
+          "velocity all set 0.0 0.0 0.0",
+          "set atom 1 vx 0.1",
+          "set atom 2 vx -0.2 vy 0.3",
+          "set atom 3 vx 0.05 vy -0.1 vz 0.2",
+          "comm_modify cutoff 3.0",
+          "neighbor 0.5 bin",
+          "variable inf atom (id==1)*(step%10<5)",
+          "group fast dynamic all var inf every 5",
+          "timestep " + std::to_string(h),
+          "fix 1 all " + integrator,
+          "thermo 0",
           "run " + std::to_string(steps)});
   std::vector<double> x;
   for (int id = 1; id <= 3; id++)
@@ -1568,6 +1627,36 @@ TEST(PEJumpAsync, RestartWithBufferAroundAStillGroupIsExact)
   for (size_t n = 0; n < unbroken.size(); n++)
     worst = std::max(worst, std::fabs(restarted[n] - unbroken[n]));
   EXPECT_LT(worst, 1e-12);    // the restart sorts the atoms: round-off
+}
+
+/* ----------------------------------------------------------------------
+   read_restart restores a dynamic group as a static one: the fine clock
+   would stop following it without a word (3.4e-3 off the unbroken run in
+   a sweep), so the fix warns unless the group command is given again
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, DynamicGroupLostInARestartIsWarnedAbout)
+{
+  const std::vector<std::string> group = {"variable xc equal 2.0+0.01*step",
+                                          "region mov sphere v_xc 3.0 3.0 1.5 side in units box",
+                                          "group fast dynamic all region mov every 10"};
+  for (const bool again : {false, true}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s, 4);
+    s.cmds(group);
+    s.cmds({"timestep 0.002", "fix 1 all pe_jump/async 10 fast", "thermo 0", "run 20 post no",
+            "write_restart pe_jump_dyn.restart", "clear", "read_restart pe_jump_dyn.restart",
+            "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5", "neighbor 0.3 bin"});
+    if (again) s.cmds(group);
+    s.cmd("fix 1 all pe_jump/async 10 fast");
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 10 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    std::remove("pe_jump_dyn.restart");
+    const bool warned =
+        out.find("was dynamic when the restart file was written") != std::string::npos;
+    EXPECT_EQ(warned, !again) << out;
+  }
 }
 
 /* ----------------------------------------------------------------------

@@ -305,3 +305,117 @@ TEST(PEJumpHostile, InstabilityStopsBeforeNaNWithOutputIntact)
     std::remove(log.c_str());
   }
 }
+
+/* ----------------------------------------------------------------------
+   "run N pre no" skips the fixes' init() and setup(), where they check
+   what changed since the last run: a change is refused at the first step
+   (a mass changed before it was integrated with the old one, lobatto 2
+   then equalled fix nve with the old mass, 0.14 off the real one after 60
+   steps; a fast group redefined at a coarse node kept the old split of
+   the interactions, and the total momentum jumped from 1e-13 to 1.9); a
+   run without changes continues exactly
+------------------------------------------------------------------------- */
+
+namespace {
+struct Continued {
+  std::vector<double> x;
+  std::string error;
+};
+Continued changed_then_run(const std::string &fix, const std::vector<std::string> &change,
+                           const std::string &pre)
+{
+  Sim s;
+  lj_liquid(s, 3);
+  s.cmds({"region slab block INF 2.0 INF INF INF INF units box", "group fast region slab",
+          "region slab2 block 4.0 6.0 INF INF INF INF units box", fix, "timestep 0.005", "thermo 0",
+          "run 40 post no"});
+  s.cmds(change);
+  try {
+    s.cmd("run 60 post no pre " + pre);
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    return {{}, e.what()};
+  }
+  return {unwrapped_positions(s), ""};
+}
+}    // namespace
+
+TEST(PEJumpHostile, RunWithPreNoRefusesChangesSinceTheLastRun)
+{
+  const std::vector<std::pair<std::vector<std::string>, std::string>> changes = {
+      {{"mass 1 1.5"}, "masses of atoms of the group changed"},
+      {{"displace_atoms all move 0.1 0 0 units box"}, "atoms of the group were moved"},
+      {{"velocity all scale 1.1"}, "velocities were changed"},
+      {{"group fast clear", "group fast region slab2"}, "atoms on the fine clock changed"}};
+  for (const std::string fix : {"fix 1 all pe_jump quadrature lobatto 2", "fix 1 all pe_jump",
+                                "fix 1 all pe_jump/async 4 fast quadrature lobatto 3"}) {
+    const bool async = fix.find("async") != std::string::npos;
+    for (const auto &change : changes) {
+      if (!async && (change.second.find("fine clock") != std::string::npos)) continue;
+      EXPECT_EQ(changed_then_run(fix, change.first, "yes").error, "") << fix;
+      EXPECT_THAT(changed_then_run(fix, change.first, "no").error,
+                  ContainsRegex(change.second + ".*this run starts with 'pre no'"))
+          << fix;
+    }
+    // nothing changed: pre no continues as pre yes, to the round-off of the
+    // lists that pre yes builds again
+    const auto yes = changed_then_run(fix, {"thermo 10"}, "yes");
+    const auto no = changed_then_run(fix, {"thermo 10"}, "no");
+    EXPECT_EQ(no.error, "") << fix;
+    EXPECT_LT(max_diff(yes.x, no.x), 1e-10) << fix;
+  }
+}
+
+/* ----------------------------------------------------------------------
+   pe_jump/async restarted inside a coarse step: the slow atoms miss the
+   impulse among them over the steps done (a timestep halved 5 fine steps
+   into a coarse step of the bonded lattice, K = 10: 1.18e-2, 5.64e-3,
+   2.74e-3 as h halves, against 2.8e-5 for the same change at a coarse
+   node), which the fix now says in a WARNING; a restart file written
+   inside a coarse step is refused with another quadrature, as with
+   another K (its slow atoms' impulses were lost without a word)
+------------------------------------------------------------------------- */
+
+namespace {
+std::string output_of(Sim &s, const std::vector<std::string> &commands)
+{
+  ::testing::internal::CaptureStdout();
+  try {
+    s.cmds(commands);
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    ::testing::internal::GetCapturedStdout();
+    return std::string("ERROR: ") + e.what();
+  }
+  return ::testing::internal::GetCapturedStdout();
+}
+}    // namespace
+
+TEST(PEJumpHostile, AsyncRestartsInsideACoarseStepAreToldOrRefused)
+{
+  for (const int first : {40, 42}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s, 3);
+    s.cmds({"region slab block INF 2.0 INF INF INF INF units box", "group fast region slab",
+            "fix 1 all pe_jump/async 4 fast", "timestep 0.005", "thermo 0"});
+    output_of(s, {"run " + std::to_string(first) + " post no"});
+    const std::string out = output_of(s, {"timestep 0.0025", "run 8 post no"});
+    const bool warned = out.find("restarts inside a coarse step (2 of 4") != std::string::npos;
+    EXPECT_EQ(warned, first == 42) << out;
+  }
+  for (const int first : {40, 42}) {
+    const std::string file = "pe_jump_rule.restart";
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s, 3);
+    s.cmds({"region slab block INF 2.0 INF INF INF INF units box", "group fast region slab",
+            "fix 1 all pe_jump/async 4 fast", "timestep 0.005", "thermo 0"});
+    output_of(s, {"run " + std::to_string(first) + " post no", "write_restart " + file, "clear",
+                  "read_restart " + file, "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5"});
+    const std::string out =
+        output_of(s, {"fix 1 all pe_jump/async 4 fast quadrature lobatto 3", "run 8 post no"});
+    std::remove(file.c_str());
+    if (first == 42)
+      EXPECT_THAT(out, ContainsRegex("ERROR: .*written inside a coarse step \\(2 of 4 fine steps "
+                                     "done\\) with another quadrature"));
+    else
+      EXPECT_THAT(out, ContainsRegex("quadrature differs from the restart file"));
+  }
+}

@@ -45,14 +45,15 @@ SCENES = {
     # scene: (default runs in table order, reference run, energy scale)
     "crack": (["nve", "sync", "async", "async-band", "nve-coarse", "sync-coarse",
                "nve-noshift", "async-noshift", "async-dyn", "async-dyn-k5", "async-fastauto",
-               "async-fastauto-tol0.1", "async-fastauto-tol0.2"], "ref", "E0"),
+               "async-fastauto-tol0.1", "async-fastauto-tol0.2", "async-fastauto-near"], "ref", "E0"),
     "impact": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn",
                 "async-dyn-r12", "async-auto", "async-fastauto",
-                "async-fastauto-tol0.1", "async-fastauto-tol0.2"], "ref", "E0"),
+                "async-fastauto-tol0.1", "async-fastauto-tol0.2", "async-fastauto-near"], "ref", "E0"),
     "cascade": (["nve", "sync", "async", "nve-coarse", "sync-coarse", "async-dyn", "async-dyn-r3",
                  "async-auto", "async-auto-k2", "async-fastauto",
                  "async-fastauto-b1", "async-fastauto-tol0.1",
-                 "async-fastauto-tol0.2"], "ref", "Epka"),
+                 "async-fastauto-tol0.2", "async-fastauto-near",
+                 "async-fastauto-near-tol0.02"], "ref", "Epka"),
 }
 
 

@@ -76,3 +76,10 @@ run cascade async-fastauto-tol0.2 -var integrator async -var K 10 -var fast keyw
 run crack async-fastauto -var integrator async -var K 10 -var fast keyword -var tol 0.02
 run crack async-fastauto-tol0.1 -var integrator async -var K 10 -var fast keyword -var tol 0.1
 run crack async-fastauto-tol0.2 -var integrator async -var K 10 -var fast keyword -var tol 0.2
+# fast auto with a thin buffer: the partners closer than 1.2 (the nearest
+# neighbours; keyword buffer 1 within 1.2) of the chosen atoms, those
+# about to be hit, join them
+run crack async-fastauto-near -var integrator async -var K 10 -var fast keyword -var tol 0.2 -var buffer 1 -var reach 1.2
+run impact async-fastauto-near -var integrator async -var K 10 -var fast keyword -var tol 0.2 -var buffer 1 -var reach 1.2
+run cascade async-fastauto-near -var integrator async -var K 10 -var fast keyword -var tol 0.05 -var buffer 1 -var reach 1.2
+run cascade async-fastauto-near-tol0.02 -var integrator async -var K 10 -var fast keyword -var tol 0.02 -var buffer 1 -var reach 1.2
