@@ -516,6 +516,40 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   // this fix has not seen them yet
   if (!split->up_to_date()) post_neighbor();
   first->require_fine_clock(groupbit, assign->clock_bit(), opts.buffer_layers > 0);
+  refuse_pair_misfit();
+  // start nodes of slow atoms inside a coarse step cannot be taken again:
+  // new atoms take theirs at their first evaluation
+  scheme->fresh = 0;
+  changes_seen = 0;
+  opened_ahead = 0;
+  assign->warn_if_made_static();
+  check_clocks();
+
+  grow_work();
+  guard->start_run();
+  evals_step = 0.0;
+  if (!scheme->started)
+    start_scheme(nullptr, true);
+  else
+    continue_scheme();
+  // the next run compares the energy of the last coarse node, if the run
+  // ends at one (the clocks as the scheme's start or restart left them)
+  if ((update->laststep - update->ntimestep + clocks->done()) % clocks->steps() == 0)
+    nodes->ask_energy_at(update->laststep);
+  if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
+  slow_magnitudes();
+  comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
+  classes->label(*split, *assign, groupbit);
+  warn_output_between_nodes();
+}
+
+/* ----------------------------------------------------------------------
+   pair styles whose forces the split cannot put on the clocks, as the
+   probes of the split tell them at setup
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::refuse_pair_misfit() const
+{
   const auto fit = split->pair_fit();
   if (fit == InteractionSplit::OFF_LISTS)
     error->all(FLERR,
@@ -541,30 +575,6 @@ void FixPEJumpAsync::setup(int /*vflag*/)
                "step (e.g. pair_style hybrid/scaled with a variable of time), which the fine and "
                "coarse nodes would see at the end of the step (first order). Use fix pe_jump",
                force->pair_style);
-  // start nodes of slow atoms inside a coarse step cannot be taken again:
-  // new atoms take theirs at their first evaluation
-  scheme->fresh = 0;
-  changes_seen = 0;
-  opened_ahead = 0;
-  assign->warn_if_made_static();
-  check_clocks();
-
-  grow_work();
-  guard->start_run();
-  evals_step = 0.0;
-  if (!scheme->started)
-    start_scheme(nullptr, true);
-  else
-    continue_scheme();
-  // the next run compares the energy of the last coarse node, if the run
-  // ends at one (the clocks as the scheme's start or restart left them)
-  if ((update->laststep - update->ntimestep + clocks->done()) % clocks->steps() == 0)
-    nodes->ask_energy_at(update->laststep);
-  if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
-  slow_magnitudes();
-  comm->forward_comm();    // the scheme's start may have caught up interior slow atoms
-  classes->label(*split, *assign, groupbit);
-  warn_output_between_nodes();
 }
 
 /* ----------------------------------------------------------------------

@@ -125,6 +125,7 @@ class FixPEJumpAsync : public Fix {
 
   void refuse_keywords() const;
   void refuse_unsplittable() const;
+  void refuse_pair_misfit() const;    // at setup: the split's probes of the pair style
   void refuse_other_fixes() const;
   void check_clocks();
   void start_scheme(const char *, bool);
