@@ -173,7 +173,16 @@ FixPEJumpAsync::~FixPEJumpAsync()
     // removed inside a coarse step (unfix): whatever integrates the atoms
     // next starts from the velocities, which must hold the fine impulses
     // (not when LAMMPS is torn down: update and force are gone then)
-    if (update && force && !clocks->at_coarse_node()) hand_over_impulses();
+    if (update && force && !clocks->at_coarse_node()) {
+      if (comm->me == 0)
+        error->warning(FLERR,
+                       "Fix {} {} is removed inside a coarse step ({} of {} fine steps done): "
+                       "the slow atoms miss the impulse of the interactions among them over "
+                       "those steps, an error of first order in the time step. Remove or "
+                       "redefine the fix at coarse nodes (after a multiple of K steps)",
+                       style, id, clocks->done(), clocks->steps());
+      hand_over_impulses();
+    }
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
@@ -1661,6 +1670,9 @@ void FixPEJumpAsync::post_run()
     refuse_velocity_changes();
   }
   scheme->end_run(group_atoms(), nodes->tallied(clocks->at_coarse_node()));
+  // the fine clock as the run leaves it (atoms lost through a boundary
+  // leave it too), for the next run to compare
+  assign->changed();
   assign->report(style);
 }
 

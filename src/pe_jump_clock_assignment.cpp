@@ -54,9 +54,10 @@ void ClockAssignment::warn_if_made_static()
 {
   if (file_dynamic && !dynamic && (comm->me == 0))
     error->warning(FLERR,
-                   "Fix pe_jump/async: its fast group {} was dynamic when the restart file was "
-                   "written, and read_restart restores it as a static group: give its group "
-                   "dynamic command again after read_restart for the fine clock to follow it",
+                   "Fix pe_jump/async: the fast group was dynamic when the restart file was "
+                   "written, and read_restart restores groups as static ones: if {} is to "
+                   "follow its criterion, give its group dynamic command again after "
+                   "read_restart",
                    fast_group);
   file_dynamic = false;
 }

@@ -313,7 +313,8 @@ TEST(PEJumpHostile, InstabilityStopsBeforeNaNWithOutputIntact)
    then equalled fix nve with the old mass, 0.14 off the real one after 60
    steps; a fast group redefined at a coarse node kept the old split of
    the interactions, and the total momentum jumped from 1e-13 to 1.9); a
-   run without changes continues exactly
+   run without changes continues exactly. A command that initializes
+   LAMMPS between the runs (write_data, write_restart, ...) is refused too
 ------------------------------------------------------------------------- */
 
 namespace {
@@ -345,7 +346,10 @@ TEST(PEJumpHostile, RunWithPreNoRefusesChangesSinceTheLastRun)
       {{"mass 1 1.5"}, "masses of atoms of the group changed"},
       {{"displace_atoms all move 0.1 0 0 units box"}, "atoms of the group were moved"},
       {{"velocity all scale 1.1"}, "velocities were changed"},
-      {{"group fast clear", "group fast region slab2"}, "atoms on the fine clock changed"}};
+      {{"group fast clear", "group fast region slab2"}, "atoms on the fine clock changed"},
+      // write_data initializes LAMMPS (fix pe_jump midpoint was 5.8e-2 off
+      // the unbroken run after 50 more steps, lobatto 3 9.6e-2)
+      {{"write_data pe_jump_pre.data"}, "initialized again"}};
   for (const std::string fix : {"fix 1 all pe_jump quadrature lobatto 2", "fix 1 all pe_jump",
                                 "fix 1 all pe_jump/async 4 fast quadrature lobatto 3"}) {
     const bool async = fix.find("async") != std::string::npos;
@@ -363,6 +367,7 @@ TEST(PEJumpHostile, RunWithPreNoRefusesChangesSinceTheLastRun)
     EXPECT_EQ(no.error, "") << fix;
     EXPECT_LT(max_diff(yes.x, no.x), 1e-10) << fix;
   }
+  std::remove("pe_jump_pre.data");
 }
 
 /* ----------------------------------------------------------------------
@@ -370,7 +375,8 @@ TEST(PEJumpHostile, RunWithPreNoRefusesChangesSinceTheLastRun)
    impulse among them over the steps done (a timestep halved 5 fine steps
    into a coarse step of the bonded lattice, K = 10: 1.18e-2, 5.64e-3,
    2.74e-3 as h halves, against 2.8e-5 for the same change at a coarse
-   node), which the fix now says in a WARNING; a restart file written
+   node), which the fix now says in a WARNING, also when it is removed
+   there (unfix); a restart file written
    inside a coarse step is refused with another quadrature, as with
    another K (its slow atoms' impulses were lost without a word)
 ------------------------------------------------------------------------- */
@@ -401,21 +407,89 @@ TEST(PEJumpHostile, AsyncRestartsInsideACoarseStepAreToldOrRefused)
     const bool warned = out.find("restarts inside a coarse step (2 of 4") != std::string::npos;
     EXPECT_EQ(warned, first == 42) << out;
   }
+  // the same for the fix removed (and defined anew) there (a 3-atom chain
+  // of springs, K = 5: 4.9e-4, 2.6e-4, 1.4e-4 off as h halves; 9.5e-5,
+  // 2.4e-5, 5.9e-6 at a coarse node)
+  for (const int first : {40, 42}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s, 3);
+    s.cmds({"region slab block INF 2.0 INF INF INF INF units box", "group fast region slab",
+            "fix 1 all pe_jump/async 4 fast", "timestep 0.005", "thermo 0"});
+    output_of(s, {"run " + std::to_string(first) + " post no"});
+    const std::string out = output_of(s, {"unfix 1", "fix 1 all pe_jump/async 4 fast"});
+    const bool warned = out.find("1 is removed inside a coarse step (2 of 4") != std::string::npos;
+    EXPECT_EQ(warned, first == 42) << out;
+  }
   for (const int first : {40, 42}) {
     const std::string file = "pe_jump_rule.restart";
     Sim s(MPI_COMM_WORLD, false);
     lj_liquid(s, 3);
     s.cmds({"region slab block INF 2.0 INF INF INF INF units box", "group fast region slab",
             "fix 1 all pe_jump/async 4 fast", "timestep 0.005", "thermo 0"});
-    output_of(s, {"run " + std::to_string(first) + " post no", "write_restart " + file, "clear",
-                  "read_restart " + file, "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5"});
+    output_of(s,
+              {"run " + std::to_string(first) + " post no", "write_restart " + file, "clear",
+               "read_restart " + file, "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5"});
     const std::string out =
         output_of(s, {"fix 1 all pe_jump/async 4 fast quadrature lobatto 3", "run 8 post no"});
     std::remove(file.c_str());
     if (first == 42)
-      EXPECT_THAT(out, ContainsRegex("ERROR: .*written inside a coarse step \\(2 of 4 fine steps "
-                                     "done\\) with another quadrature"));
+      EXPECT_THAT(out,
+                  ContainsRegex("ERROR: .*written inside a coarse step \\(2 of 4 fine steps "
+                                "done\\) with another quadrature"));
     else
       EXPECT_THAT(out, ContainsRegex("quadrature differs from the restart file"));
   }
+}
+
+/* ----------------------------------------------------------------------
+   fine-clock atoms lost through a fixed boundary during a run are no
+   change since that run: "run N pre no" goes on (it was refused, "the
+   atoms on the fine clock changed"), as a run with pre yes does, and
+   equals the unbroken run
+------------------------------------------------------------------------- */
+
+TEST(PEJumpHostile, FineClockAtomsLostInARunAreNoChangeAfterIt)
+{
+  const auto shot_out = [](const std::vector<std::string> &runs) {
+    Sim s;
+    s.cmds({"units lj",
+            "atom_style atomic",
+            "atom_modify map array",
+            "boundary f p p",
+            "lattice fcc 0.8442",
+            "region box block 0 4 0 4 0 4",
+            "create_box 1 box",
+            "create_atoms 1 box",
+            "mass 1 1.0",
+            "velocity all create 1.0 4928",
+            "pair_style lj/cut 2.5",
+            "pair_coeff 1 1 1.0 1.0 2.5",
+            "neighbor 0.3 bin",
+            "region edge block 5.6 INF INF INF INF INF units box",
+            "group fast region edge",
+            "velocity fast set 5.0 NULL NULL",
+            "fix 1 all pe_jump/async 5 fast",
+            "thermo_modify lost ignore",
+            "timestep 0.004",
+            "thermo 0"});
+    std::string error;
+    try {
+      s.cmds(runs);
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      error = e.what();
+    }
+    std::vector<double> x;
+    for (int id = 1; id <= 256; id++) {
+      const int i = s.lmp->atom->map(id);
+      for (int k = 0; k < 3; k++) x.push_back((i >= 0) ? s.lmp->atom->x[i][k] : -1.0);
+    }
+    return std::make_pair(s.lmp->atom->natoms, std::make_pair(x, error));
+  };
+  const auto unbroken = shot_out({"run 100 post no"});
+  const auto pieces = shot_out({"run 20 post no", "run 20 pre no post no", "run 20 pre no post no",
+                                "run 20 pre no post no", "run 20 pre no post no"});
+  EXPECT_LT(unbroken.first, 256);    // atoms were lost
+  EXPECT_EQ(pieces.second.second, "");
+  EXPECT_EQ(pieces.first, unbroken.first);
+  EXPECT_LT(max_diff(pieces.second.first, unbroken.second.first), 1e-12);
 }
