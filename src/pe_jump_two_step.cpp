@@ -64,7 +64,9 @@ double **TwoStep::fstart() const
 
 void TwoStep::init(const char *style)
 {
-  note_init();
+  // a command between runs that initializes LAMMPS (write_data,
+  // write_restart, ...) and a run with "pre no" after it
+  reinitialized = pending_setup;
   if (utils::strmatch(update->integrate_style, "^respa"))
     error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
   // the jump relation needs a step that goes forward: with h = 0 it flips

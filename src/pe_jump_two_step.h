@@ -72,9 +72,6 @@ namespace PEJump {
     // the last run no longer fits (changed velocities included, and
     // clocks_changed: the atoms on the fine clock of pe_jump/async)
     bool awaits_setup() const { return pending_setup; }
-    // init() of the fix: a command between runs that initializes LAMMPS
-    // (write_data, write_restart, ...) also leaves the fix without setup
-    void note_init() { reinitialized = pending_setup; }
     void refuse_changes_without_setup(const char *style, const AtomSet &, bool clocks_changed);
     // an energy minimization moves the atoms (Fix::min_setup()): the state
     // belongs to the old positions, the next run restarts the scheme
