@@ -31,7 +31,7 @@ using namespace LAMMPS_NS::PEJump;
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
     Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}, at_end(),
-    minimized(false), pending_setup(false), reinitialized(false)
+    minimized(false), pending_setup(false)
 {
   at_end.atoms = -1;    // no run yet
   JUMP = state.add("jump", 3, 0.0);
@@ -64,9 +64,6 @@ double **TwoStep::fstart() const
 
 void TwoStep::init(const char *style)
 {
-  // a command between runs that initializes LAMMPS (write_data,
-  // write_restart, ...) and a run with "pre no" after it
-  reinitialized = pending_setup;
   if (utils::strmatch(update->integrate_style, "^respa"))
     error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
   // the jump relation needs a step that goes forward: with h = 0 it flips
@@ -122,7 +119,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
   }
   at_end.atoms = -1;
   minimized = false;
-  pending_setup = reinitialized = false;
+  pending_setup = false;
 
   // velocities that are not finite (a velocity command gone wrong, e.g.
   // velocity scale to a negative temperature) would only show up later
@@ -284,13 +281,8 @@ void TwoStep::refuse_changes_without_setup(const char *style, const AtomSet &set
                                            bool clocks_changed)
 {
   pending_setup = false;
-  const bool stale = reinitialized;
-  reinitialized = false;
   // (the time step may change: the scheme takes any step sequence)
   std::string why = changed_since_run(census(set, {false, 0.0, 0.0}), false);
-  if (why.empty() && stale)
-    why = "LAMMPS was initialized again since the last run (by write_data, write_restart, ...), "
-          "which leaves the fix's state of the steps stale";
   if (why.empty() && (velocity_change(set, false) != 0))
     why = "velocities were changed since the last run";
   if (why.empty() && clocks_changed) why = "the atoms on the fine clock changed since the last run";

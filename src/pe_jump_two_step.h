@@ -164,7 +164,6 @@ namespace PEJump {
     Census at_end;         // at the end of the last run (atoms -1: none)
     bool minimized;        // an energy minimization since the last run
     bool pending_setup;    // a run ended, and no setup() since
-    bool reinitialized;    // ... and init() was called since
     std::string changed_since_run(const Census &now, bool new_step_restarts) const;
   };
 
