@@ -282,10 +282,8 @@ void FixPEJump::setup_pre_reverse(int eflag, int vflag)
 
 void FixPEJump::initial_integrate(int /*vflag*/)
 {
-  if (scheme->awaits_setup()) {
-    scheme->refuse_changes_without_setup(style, group_atoms(), false);
-    next_reneighbor = update->ntimestep;    // see FixPEJumpAsync::initial_integrate()
-  }
+  if (scheme->awaits_setup() && scheme->check_run_without_setup(style, group_atoms(), false))
+    next_reneighbor = update->ntimestep;
   begin_step();
   // the Verlet loop's forces are taken at the primary node: a force that
   // depends on time (a variable of time, e.g. in fix addforce) must see

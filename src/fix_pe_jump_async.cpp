@@ -723,12 +723,9 @@ void FixPEJumpAsync::setup_pre_reverse(int eflag, int vflag)
 
 void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 {
-  if (scheme->awaits_setup()) {
-    scheme->refuse_changes_without_setup(style, group_atoms(), assign->changed());
-    // commands between the runs may have rebuilt the ghost atoms (write_data,
-    // write_restart): lists built in this step fit them again
+  if (scheme->awaits_setup() &&
+      scheme->check_run_without_setup(style, group_atoms(), assign->changed()))
     next_reneighbor = update->ntimestep;
-  }
   if (reinit_pending) start_scheme(nullptr, false);
   reinit_pending = 0;
   h_step = update->dt;

@@ -31,7 +31,7 @@ using namespace LAMMPS_NS::PEJump;
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
     Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}, at_end(),
-    minimized(false), pending_setup(false)
+    minimized(false), pending_setup(false), reinitialized(false)
 {
   at_end.atoms = -1;    // no run yet
   JUMP = state.add("jump", 3, 0.0);
@@ -64,6 +64,7 @@ double **TwoStep::fstart() const
 
 void TwoStep::init(const char *style)
 {
+  reinitialized = pending_setup;    // a command between runs initialized LAMMPS
   if (utils::strmatch(update->integrate_style, "^respa"))
     error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
   // the jump relation needs a step that goes forward: with h = 0 it flips
@@ -119,7 +120,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
   }
   at_end.atoms = -1;
   minimized = false;
-  pending_setup = false;
+  pending_setup = reinitialized = false;
 
   // velocities that are not finite (a velocity command gone wrong, e.g.
   // velocity scale to a negative temperature) would only show up later
@@ -277,8 +278,7 @@ void TwoStep::end_run(const AtomSet &set, const NodeSampler::Tallied &energy)
 
 /* ---------------------------------------------------------------------- */
 
-void TwoStep::refuse_changes_without_setup(const char *style, const AtomSet &set,
-                                           bool clocks_changed)
+bool TwoStep::check_run_without_setup(const char *style, const AtomSet &set, bool clocks_changed)
 {
   pending_setup = false;
   // (the time step may change: the scheme takes any step sequence)
@@ -291,6 +291,9 @@ void TwoStep::refuse_changes_without_setup(const char *style, const AtomSet &set
                "Fix {}: {}, and this run starts with 'pre no', which skips the fix's check at "
                "the start of a run: use run with pre yes (the default)",
                style, why);
+  const bool stale = reinitialized;
+  reinitialized = false;
+  return stale;
 }
 
 /* ---------------------------------------------------------------------- */

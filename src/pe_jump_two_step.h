@@ -70,9 +70,12 @@ namespace PEJump {
     // "run N pre no" starts a run without setup(), so without the check
     // above: at the first step of such a run, an error if the state of
     // the last run no longer fits (changed velocities included, and
-    // clocks_changed: the atoms on the fine clock of pe_jump/async)
+    // clocks_changed: the atoms on the fine clock of pe_jump/async); true
+    // if LAMMPS was initialized in between (write_data, write_restart, ...
+    // rebuild the ghost atoms, which the lists of the last build no longer
+    // fit: the caller has them built)
     bool awaits_setup() const { return pending_setup; }
-    void refuse_changes_without_setup(const char *style, const AtomSet &, bool clocks_changed);
+    bool check_run_without_setup(const char *style, const AtomSet &, bool clocks_changed);
     // an energy minimization moves the atoms (Fix::min_setup()): the state
     // belongs to the old positions, the next run restarts the scheme
     void atoms_minimized() { minimized = true; }
@@ -164,6 +167,7 @@ namespace PEJump {
     Census at_end;         // at the end of the last run (atoms -1: none)
     bool minimized;        // an energy minimization since the last run
     bool pending_setup;    // a run ended, and no setup() since
+    bool reinitialized;    // ... and init() was called since
     std::string changed_since_run(const Census &now, bool new_step_restarts) const;
   };
 
