@@ -392,28 +392,26 @@ std::string output_of(Sim &s, const std::vector<std::string> &commands)
 
 TEST(PEJumpHostile, AsyncRestartsInsideACoarseStepAreToldOrRefused)
 {
-  for (const int first : {40, 42}) {
+  // whether the output of the commands after a run of `first` steps (2 of
+  // 4 fine steps done at 42) tells `what`
+  const auto told = [](int first, const std::vector<std::string> &then, const std::string &what) {
     Sim s(MPI_COMM_WORLD, false);
     lj_liquid(s, 3);
     s.cmds({"region slab block INF 2.0 INF INF INF INF units box", "group fast region slab",
             "fix 1 all pe_jump/async 4 fast", "timestep 0.005", "thermo 0"});
     output_of(s, {"run " + std::to_string(first) + " post no"});
-    const std::string out = output_of(s, {"timestep 0.0025", "run 8 post no"});
-    const bool warned = out.find("restarts inside a coarse step (2 of 4") != std::string::npos;
-    EXPECT_EQ(warned, first == 42) << out;
-  }
-  // the same for the fix removed (and defined anew) there (a 3-atom chain
-  // of springs, K = 5: 4.9e-4, 2.6e-4, 1.4e-4 off as h halves; 9.5e-5,
-  // 2.4e-5, 5.9e-6 at a coarse node)
+    return output_of(s, then).find(what) != std::string::npos;
+  };
   for (const int first : {40, 42}) {
-    Sim s(MPI_COMM_WORLD, false);
-    lj_liquid(s, 3);
-    s.cmds({"region slab block INF 2.0 INF INF INF INF units box", "group fast region slab",
-            "fix 1 all pe_jump/async 4 fast", "timestep 0.005", "thermo 0"});
-    output_of(s, {"run " + std::to_string(first) + " post no"});
-    const std::string out = output_of(s, {"unfix 1", "fix 1 all pe_jump/async 4 fast"});
-    const bool warned = out.find("1 is removed inside a coarse step (2 of 4") != std::string::npos;
-    EXPECT_EQ(warned, first == 42) << out;
+    EXPECT_EQ(
+        told(first, {"timestep 0.0025", "run 8 post no"}, "restarts inside a coarse step (2 of 4"),
+        first == 42);
+    // the same for the fix removed (and defined anew) there (a 3-atom chain
+    // of springs, K = 5: 4.9e-4, 2.6e-4, 1.4e-4 off as h halves; 9.5e-5,
+    // 2.4e-5, 5.9e-6 at a coarse node)
+    EXPECT_EQ(told(first, {"unfix 1", "fix 1 all pe_jump/async 4 fast"},
+                   "1 is removed inside a coarse step (2 of 4"),
+              first == 42);
   }
   for (const int first : {40, 42}) {
     const std::string file = "pe_jump_rule.restart";
