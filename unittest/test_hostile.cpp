@@ -492,7 +492,7 @@ TEST(PEJumpHostile, FineClockAtomsLostInARunAreNoChangeAfterIt)
    run with "pre no" after them kept the lists of the last build, and on
    this liquid (864 atoms, from a sweep) fix pe_jump midpoint ended 5.8e-2
    and lobatto 3 9.6e-2 off the unbroken run 50 steps later (fix nve
-   exact; run 100 pre no every 20 "write_restart ...": 9.7e-2). The
+   exact; run 80 pre no every 20 "write_restart ...": 7.5e-2). The
    fixes now build the lists at the first step of such a run
 ------------------------------------------------------------------------- */
 
@@ -515,7 +515,7 @@ TEST(PEJumpHostile, CheckpointsBetweenRunsWithPreNoContinueExactly)
       const auto pieces = liquid(fix, {"run 50 post no", between, "run 50 pre no post no"});
       EXPECT_LT(max_diff(unbroken, pieces), 1e-10) << fix << " / " << between;
     }
-    // the checkpoints of run every (9.7e-2 off for midpoint before)
+    // the checkpoints of run every (7.5e-2 off for midpoint before)
     const auto every =
         liquid(fix,
                {"run 20 post no",
