@@ -173,16 +173,8 @@ FixPEJumpAsync::~FixPEJumpAsync()
     // removed inside a coarse step (unfix): whatever integrates the atoms
     // next starts from the velocities, which must hold the fine impulses
     // (not when LAMMPS is torn down: update and force are gone then)
-    if (update && force && !clocks->at_coarse_node()) {
-      if (comm->me == 0)
-        error->warning(FLERR,
-                       "Fix {} {} is removed inside a coarse step ({} of {} fine steps done): "
-                       "the slow atoms miss the impulse of the interactions among them over "
-                       "those steps, an error of first order in the time step. Remove or "
-                       "redefine the fix at coarse nodes (after a multiple of K steps)",
-                       style, id, clocks->done(), clocks->steps());
-      hand_over_impulses();
-    }
+    if (update && force && !clocks->at_coarse_node())
+      hand_over_impulses(fmt::format("fix {} is removed", id));
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
@@ -954,17 +946,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   catch_up_all();
   if (with_start) {
-    if (!clocks->at_coarse_node()) {
-      if (comm->me == 0)
-        error->warning(FLERR,
-                       "Fix {}: the two-step scheme restarts inside a coarse step ({} of {} fine "
-                       "steps done): the slow atoms miss the impulse of the interactions among "
-                       "them over those steps, an error of first order in the time step. Change "
-                       "the time step, masses, positions, velocities, atoms or fixes at coarse "
-                       "nodes (after a multiple of K steps)",
-                       style, clocks->done(), clocks->steps());
-      hand_over_impulses();
-    }
+    if (!clocks->at_coarse_node()) hand_over_impulses("the two-step scheme restarts");
     clocks->begin_coarse();
     double **facc = state->vec(FACC);
     for (int i = 0; i < atom->nlocal; i++)
@@ -1010,11 +992,19 @@ std::string FixPEJumpAsync::instability_advice() const
    so that the total momentum stays what the scheme left; the impulse of
    the interactions among slow atoms over the broken coarse step, whose
    sum is zero, is not given (an O(h) change of the slow velocities, as
-   from a new start of the scheme)
+   from a new start of the scheme, which makes the run first order: a
+   warning names the event)
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::hand_over_impulses()
+void FixPEJumpAsync::hand_over_impulses(const std::string &event)
 {
+  if (comm->me == 0)
+    error->warning(FLERR,
+                   "Fix {}: {} inside a coarse step ({} of {} fine steps done): the slow atoms "
+                   "miss the impulse of the interactions among them over those steps, an error "
+                   "of first order in the time step. Change the time step, masses, positions, "
+                   "velocities, atoms or fixes at coarse nodes (after a multiple of K steps)",
+                   style, event, clocks->done(), clocks->steps());
   double **v = atom->v;
   double **facc = state->vec(FACC);
   const double ftm2v = force->ftm2v;

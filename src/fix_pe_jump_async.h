@@ -136,8 +136,10 @@ class FixPEJumpAsync : public Fix {
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);
   void choose_fast(std::vector<int> &chosen) const;
   void restart_jumps(const std::vector<int> &to_fine, double **f);
-  void store_start_node();      // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
-  void hand_over_impulses();    // inside a coarse step: the slow atoms get their fine impulses
+  void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
+  // inside a coarse step: the slow atoms get their fine impulses (event:
+  // what breaks the coarse step off, for a warning)
+  void hand_over_impulses(const std::string &event);
   void continue_scheme();
   void refuse_slow_velocity_changes();    // inside a coarse step (at setup)
   void warn_output_between_nodes() const;
