@@ -52,9 +52,10 @@ void OtherFixes::sort(ForceSampler &sampler)
     if (mask & END_OF_STEP) end_of_step_every.push_back(MAX(ifix->nevery, 1));
     if (mask & PRE_FORCE) preparations.push_back(ifix);
     // the fixes that replace or project forces leave velocities alone (fix
-    // enforce2d zeroes the z velocity, which is zero in a 2d run anyway)
+    // enforce2d zeroes the z velocity, which is zero in a 2d run anyway), as
+    // do those that only read the atoms
     const bool projects = (mask & POST_FORCE) && replaces_forces(ifix);
-    if (!projects) hooks |= mask & (BETWEEN_STEPS | INSIDE_STEP);
+    if (!projects && !reads_only(ifix)) hooks |= mask & (BETWEEN_STEPS | INSIDE_STEP);
     if (ifix->time_integrate) {
       others_bits |= ifix->groupbit;
       continue;
@@ -201,6 +202,20 @@ void OtherFixes::refuse_shared_atoms() const
 bool OtherFixes::steps_own_clock(const Fix *fix)
 {
   return style_is(fix, {"^smd", "^ti/spring", "^restrain"});
+}
+
+/* ----------------------------------------------------------------------
+   fixes that read the atoms and never change velocities: averages and
+   output (ave/time, ave/atom, ave/chunk, ave/correlate, ave/histo, ...,
+   print, vector, store/state, halt), the updates of dynamic groups and
+   load balancing (they move atoms between ranks with their velocities)
+------------------------------------------------------------------------- */
+
+bool OtherFixes::reads_only(const Fix *fix)
+{
+  return style_is(fix,
+                  {"^ave/", "^print$", "^vector$", "^store/state$", "^halt$", "^GROUP$",
+                   "^balance$"});
 }
 
 /* ----------------------------------------------------------------------

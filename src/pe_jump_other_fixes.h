@@ -86,6 +86,7 @@ namespace PEJump {
 
     static bool steps_own_clock(const class Fix *);
     static bool replaces_forces(const Fix *);
+    static bool reads_only(const Fix *);
     // the fix's style matches one of the patterns (utils::strmatch)
     static bool style_is(const Fix *, std::initializer_list<const char *> patterns);
     // the fixes for which keep(fix) holds, for messages: "fix 2 (wall/reflect),

@@ -1,8 +1,11 @@
 // unit tests of parts of the fixes that need a LAMMPS instance but no run:
 // the per-atom state table (values kept through growth, copies, exchange
-// and restart packing, new atoms at their init values, memory count)
+// and restart packing, new atoms at their init values, memory count), and
+// which other fixes the integrators watch for velocity changes
 
 #include "pe_jump_atom_state.h"
+#include "pe_jump_force_sampler.h"
+#include "pe_jump_other_fixes.h"
 #include "pe_jump_systems.h"
 
 #include "gtest/gtest.h"
@@ -12,6 +15,8 @@
 
 using namespace PEJumpTest;
 using LAMMPS_NS::PEJump::AtomState;
+using LAMMPS_NS::PEJump::ForceSampler;
+using LAMMPS_NS::PEJump::OtherFixes;
 
 TEST(AtomState, KeepsValuesThroughGrowthCopyAndPacking)
 {
@@ -66,4 +71,37 @@ TEST(AtomState, KeepsValuesThroughGrowthCopyAndPacking)
   state.swap(vec, other);
   EXPECT_EQ(state.vec(vec)[9000][0], 7.0);
   EXPECT_EQ(state.vec(other)[9000][2], 902.0);
+}
+
+// fixes that only read the atoms (averages, output, dynamic group updates,
+// load balancing) are not watched for velocity changes: watching costs a
+// fingerprint of every velocity per step and keeps a midpoint step from
+// being begun ahead; a fix that may change velocities is watched
+TEST(OtherFixes, FixesThatOnlyReadAreNotWatched)
+{
+  Sim s;
+  lj_liquid(s, 3);
+  s.cmds({"fix int all pe_jump", "compute msd all msd", "variable inside atom x<2.0",
+          "group near dynamic all var inside every 10",
+          "fix avt all ave/time 5 2 10 c_thermo_temp c_msd[4]",
+          "fix ava all ave/atom 2 5 10 vx", "compute bins all chunk/atom bin/1d x lower 0.5",
+          "fix avc all ave/chunk 2 5 10 bins vx",
+          "fix cor all ave/correlate 2 5 10 c_thermo_temp", "fix vec all vector 5 c_thermo_temp",
+          "fix out all print 10 'a line'", "fix kept all store/state 10 vx",
+          "variable one equal 1.0",
+          "fix stop all halt 10 v_one > 1e9", "fix bal all balance 10 1.1 shift x 5 1.1",
+          "run 0 post no"});
+  auto *self = s.lmp->modify->get_fix_by_id("int");
+  ForceSampler sampler(s.lmp);
+  OtherFixes readers(s.lmp, self);
+  readers.sort(sampler);
+  EXPECT_FALSE(readers.may_change_velocities(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP));
+  for (const char *changer : {"fix mom all momentum 10 linear 1 1 1",
+                              "fix scale all temp/rescale 10 1.0 1.0 0.1 1.0"}) {
+    s.cmd(changer);
+    OtherFixes others(s.lmp, self);
+    others.sort(sampler);
+    EXPECT_TRUE(others.may_change_velocities(OtherFixes::BETWEEN_STEPS)) << changer;
+    s.cmd(std::string("unfix ") + (changer[4] == 'm' ? "mom" : "scale"));
+  }
 }
