@@ -213,9 +213,8 @@ bool OtherFixes::steps_own_clock(const Fix *fix)
 
 bool OtherFixes::reads_only(const Fix *fix)
 {
-  return style_is(fix,
-                  {"^ave/", "^print$", "^vector$", "^store/state$", "^halt$", "^GROUP$",
-                   "^balance$"});
+  return style_is(
+      fix, {"^ave/", "^print$", "^vector$", "^store/state$", "^halt$", "^GROUP$", "^balance$"});
 }
 
 /* ----------------------------------------------------------------------

@@ -83,21 +83,19 @@ TEST(OtherFixes, FixesThatOnlyReadAreNotWatched)
   lj_liquid(s, 3);
   s.cmds({"fix int all pe_jump", "compute msd all msd", "variable inside atom x<2.0",
           "group near dynamic all var inside every 10",
-          "fix avt all ave/time 5 2 10 c_thermo_temp c_msd[4]",
-          "fix ava all ave/atom 2 5 10 vx", "compute bins all chunk/atom bin/1d x lower 0.5",
-          "fix avc all ave/chunk 2 5 10 bins vx",
+          "fix avt all ave/time 5 2 10 c_thermo_temp c_msd[4]", "fix ava all ave/atom 2 5 10 vx",
+          "compute bins all chunk/atom bin/1d x lower 0.5", "fix avc all ave/chunk 2 5 10 bins vx",
           "fix cor all ave/correlate 2 5 10 c_thermo_temp", "fix vec all vector 5 c_thermo_temp",
           "fix out all print 10 'a line'", "fix kept all store/state 10 vx",
-          "variable one equal 1.0",
-          "fix stop all halt 10 v_one > 1e9", "fix bal all balance 10 1.1 shift x 5 1.1",
-          "run 0 post no"});
+          "variable one equal 1.0", "fix stop all halt 10 v_one > 1e9",
+          "fix bal all balance 10 1.1 shift x 5 1.1", "run 0 post no"});
   auto *self = s.lmp->modify->get_fix_by_id("int");
   ForceSampler sampler(s.lmp);
   OtherFixes readers(s.lmp, self);
   readers.sort(sampler);
   EXPECT_FALSE(readers.may_change_velocities(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP));
-  for (const char *changer : {"fix mom all momentum 10 linear 1 1 1",
-                              "fix scale all temp/rescale 10 1.0 1.0 0.1 1.0"}) {
+  for (const char *changer :
+       {"fix mom all momentum 10 linear 1 1 1", "fix scale all temp/rescale 10 1.0 1.0 0.1 1.0"}) {
     s.cmd(changer);
     OtherFixes others(s.lmp, self);
     others.sort(sampler);
