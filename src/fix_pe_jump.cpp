@@ -559,7 +559,10 @@ void FixPEJump::final_integrate()
     finish_step(favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
 
-  if (rest != 0.0) tally_at_node();
+  if (rest != 0.0)
+    tally_at_node();
+  else
+    nodes->ghosts_with_owned(others->step_observed());
   if (others->integrate_others() && (neighbor->ago == 0) && !rule->only_end_nodes())
     others->refuse_interactions(rule->name().c_str());
   evals_total += evals_step;

@@ -614,9 +614,9 @@ void FixPEJumpAsync::warn_output_between_nodes() const
       what += output->dump[i]->id;
     }
   // fixes that sample values at the end of steps every Nevery steps (fix
-  // ave/time, ave/correlate, ave/atom, vector, print, ...)
+  // ave/time, ave/correlate, ave/atom, vector, print, store/state, halt, ...)
   const std::string samplers = others->named([&](Fix *fix) {
-    return OtherFixes::style_is(fix, {"^ave/", "^vector", "^print"}) &&
+    return OtherFixes::style_is(fix, {"^ave/", "^vector", "^print", "^store/state", "^halt"}) &&
         off_nodes(fix->nevery, false);
   });
   if (!samplers.empty()) what += (what.empty() ? "" : ", ") + samplers;

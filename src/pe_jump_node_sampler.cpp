@@ -33,7 +33,7 @@ using namespace LAMMPS_NS::PEJump;
 
 NodeSampler::NodeSampler(LAMMPS *lmp, ForceSampler *forces) :
     Pointers(lmp), sampler(forces), xkept(nullptr), fkept(nullptr), nkept(0), keeping(false),
-    shift_time(false), eflag_step(0), vflag_step(0)
+    shift_time(false), ghosts_away(false), eflag_step(0), vflag_step(0)
 {
 }
 
@@ -125,6 +125,7 @@ void NodeSampler::evaluate_at(double shift, const FreeFlight &v, const AtomSet &
   if (shift_time) update->atime = now + shift;
   sampler->compute(mask, 0, 0);
   update->atime = now;
+  ghosts_away = true;    // the evaluation brought the ghosts to the node
 }
 
 /* ---------------------------------------------------------------------- */
@@ -207,10 +208,20 @@ double NodeSampler::at_step_end(bool observed, int groupbit)
         if (!(mask[i] & groupbit))
           for (int k = 0; k < 3; k++) f[i][k] = others[n++];
     }
+    ghosts_away = false;
     return 1.0;
   }
   if (observed) comm->forward_comm();
+  ghosts_away = false;
   return 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void NodeSampler::ghosts_with_owned(bool observed)
+{
+  if (ghosts_away && observed) comm->forward_comm();
+  ghosts_away = false;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -119,6 +119,10 @@ namespace PEJump {
     // which another time integrator of theirs applies after this fix
     double at_step_end(bool observed, int groupbit);
     bool tally_step() const;    // the step about to begin tallies energy or virial
+    // the step ends at the primary node, evaluated by the MD step: if nodes
+    // were evaluated since, the ghosts are still at the last of them; on
+    // observed steps bring them to where the owned atoms are
+    void ghosts_with_owned(bool observed);
 
     // potential energy of the contributions in mask at the current
     // positions (one evaluation; the forces are kept)
@@ -145,6 +149,7 @@ namespace PEJump {
     int nkept;    // room for this many owned atoms
     bool keeping;
     bool shift_time;
+    bool ghosts_away;    // evaluate_at() moved the ghosts since the step end's communication
     int eflag_step, vflag_step;
     void make_room();
   };

@@ -1904,15 +1904,25 @@ TEST(PEJumpAsync, SamplingFixesBetweenCoarseNodesWarn)
               (every % 5) != 0)
         << "ave/time every " << every;
   }
-  // fixes that sample no values at the end of steps are not named
-  Sim s(MPI_COMM_WORLD, false);
-  lj_liquid(s);
-  s.cmds({"group fast id 1:20", "fix 1 all pe_jump/async 5 fast", "thermo 10",
-          "fix keep all store/state 1 x"});
-  ::testing::internal::CaptureStdout();
-  s.cmd("run 20 post no");
-  const std::string out = ::testing::internal::GetCapturedStdout();
-  EXPECT_FALSE(std::regex_search(out, std::regex("not coarse nodes"))) << out;
+  // fix store/state and fix halt sample values at the end of steps too (a
+  // slow atom's vx stored every 3 steps with K = 5 was the coarse step's
+  // start's, without a word); store/state that stores once is not named
+  for (const std::string &sampler :
+       {std::string("store/state 3 vx"), std::string("halt 3 v_k > 1e9"),
+        std::string("store/state 0 vx")}) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s);
+    s.cmds({"group fast id 1:20", "fix 1 all pe_jump/async 5 fast", "thermo 10",
+            "variable k equal ke", "fix other all " + sampler});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 20 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    EXPECT_EQ(std::regex_search(out,
+                                std::regex("fix other \\([a-z/]+\\) on steps that are not "
+                                           "coarse nodes")),
+              sampler.find(" 0 ") == std::string::npos)
+        << sampler;
+  }
 }
 
 /* ----------------------------------------------------------------------
