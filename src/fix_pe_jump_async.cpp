@@ -1254,10 +1254,11 @@ void FixPEJumpAsync::final_integrate()
   if (!coarse_end && others->step_observed()) catch_up_all();
 
   split->activate(InteractionSplit::ALL);
-  evals_step +=
+  const double at_end =
       nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
   split->restore();
-  if (nodes->step_tallies()) first->forces_written();    // on every atom
+  evals_step += at_end;
+  if (at_end > 0.0) first->forces_written();    // on every atom
   evals_total += evals_step;
   scheme->forget_energies();
 

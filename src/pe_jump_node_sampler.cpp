@@ -16,13 +16,16 @@
 #include "atom.h"
 #include "comm.h"
 #include "compute.h"
+#include "dump.h"
 #include "error.h"
 #include "force.h"
 #include "memory.h"
 #include "modify.h"
+#include "output.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_quadrature.h"
 #include "update.h"
+#include "utils.h"
 
 #include <cstring>
 
@@ -193,7 +196,7 @@ double NodeSampler::memory_usage() const
 
 double NodeSampler::at_step_end(bool observed, int groupbit)
 {
-  if (step_tallies()) {
+  if (step_tallies() || forces_dumped()) {
     const int *mask = atom->mask;
     double **f = atom->f;
     std::vector<double> others;    // forces of the atoms outside the group
@@ -214,6 +217,20 @@ double NodeSampler::at_step_end(bool observed, int groupbit)
   if (observed) comm->forward_comm();
   ghosts_away = false;
   return 0.0;
+}
+
+/* ----------------------------------------------------------------------
+   true if a dump that may write per-atom forces writes at this step (all
+   styles but those of positions only, pictures and local or grid data)
+------------------------------------------------------------------------- */
+
+bool NodeSampler::forces_dumped() const
+{
+  for (int i = 0; i < output->ndump; i++)
+    if ((output->next_dump[i] == update->ntimestep) &&
+        !utils::strmatch(output->dump[i]->style, "^(atom|xyz|dcd|xtc|image|movie|local|grid)"))
+      return true;
+  return false;
 }
 
 /* ---------------------------------------------------------------------- */

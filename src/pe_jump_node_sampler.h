@@ -112,9 +112,10 @@ namespace PEJump {
     bool step_tallies() const { return eflag_step || vflag_step; }
 
     // the atoms are at the step end, the forces were taken elsewhere: on
-    // steps that tally energy or virial evaluate everything there (the
-    // forces there replace the others; returns 1 evaluation), else bring
-    // the ghosts there if observed (returns 0). The owned atoms outside
+    // steps that tally energy or virial, or where a dump may write the
+    // forces, evaluate everything there (the forces there replace the
+    // others; returns 1 evaluation), else bring the ghosts there if
+    // observed (returns 0). The owned atoms outside
     // the group of groupbit (0: none) keep the forces of the MD step,
     // which another time integrator of theirs applies after this fix
     double at_step_end(bool observed, int groupbit);
@@ -152,6 +153,7 @@ namespace PEJump {
     bool ghosts_away;    // evaluate_at() moved the ghosts since the step end's communication
     int eflag_step, vflag_step;
     void make_room();
+    bool forces_dumped() const;
   };
 
 }    // namespace PEJump

@@ -16,11 +16,14 @@
 #include "gtest/gtest.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <random>
 #include <regex>
+#include <sstream>
 
 using namespace PEJumpTest;
 using ::testing::ContainsRegex;
@@ -1035,6 +1038,50 @@ TEST(PEJump, GhostAtomsAreAtTheStepEndOnOutputSteps)
     s.cmds({"unfix 1", "run 0 post no"});
     EXPECT_NEAR(pairs, evdwl, 1e-10 * std::fabs(evdwl)) << rule;
     EXPECT_NEAR(between, s.eval("c_gg"), 1e-10 * std::fabs(between)) << rule;
+  }
+}
+
+// the per-atom forces that a dump writes are those at the atoms' positions,
+// as with fix nve: on dump steps that tally no energy the rules whose
+// primary node is not the step end (midpoint, Legendre) evaluate the forces
+// there, and pe_jump/async gives every atom its total force at a coarse
+// node (it held the fine interactions' forces only: interior slow atoms 0).
+// Checked against a fresh evaluation at the dumped positions.
+TEST(PEJump, DumpedForcesAreThoseAtTheDumpedPositions)
+{
+  for (const std::string fix :
+       {"pe_jump", "pe_jump quadrature legendre 2", "pe_jump quadrature lobatto 3",
+        "pe_jump/async 5 fast", "pe_jump/async 5 fast quadrature lobatto 3"}) {
+    Sim s;
+    lj_liquid(s);
+    const std::string file = "pe_jump_forces.dump";
+    s.cmds({"group fast id 1:40", "fix 1 all " + fix, "timestep 0.004", "thermo 100",
+            "dump d all custom 5 " + file + " id x y z fx fy fz",
+            "dump_modify d sort id format float %.17g", "run 20 post no", "undump d"});
+    // the forces of step 10 as dumped, then evaluated afresh there
+    std::map<int, std::array<double, 3>> dumped;
+    std::ifstream in(file);
+    std::string line;
+    while (std::getline(in, line) && (line != "10")) continue;
+    while (std::getline(in, line) && (line.rfind("ITEM: ATOMS", 0) != 0)) continue;
+    for (int n = 0; n < s.lmp->atom->natoms && std::getline(in, line); ++n) {
+      std::istringstream row(line);
+      int id;
+      double x[3], f[3];
+      row >> id >> x[0] >> x[1] >> x[2] >> f[0] >> f[1] >> f[2];
+      dumped[id] = {f[0], f[1], f[2]};
+    }
+    ASSERT_EQ(dumped.size(), s.lmp->atom->natoms) << fix;
+    s.cmds({"unfix 1", "read_dump " + file + " 10 x y z box no", "run 0 post no"});
+    std::remove(file.c_str());
+    double worst = 0.0, scale = 0.0;
+    for (const auto &[id, f] : dumped)
+      for (int k = 0; k < 3; k++) {
+        const double fresh = s.lmp->atom->f[s.lmp->atom->map(id)][k];
+        worst = std::max(worst, std::fabs(f[k] - fresh));
+        scale = std::max(scale, std::fabs(fresh));
+      }
+    EXPECT_LT(worst, 1e-10 * scale) << fix;
   }
 }
 
