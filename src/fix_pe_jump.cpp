@@ -216,6 +216,7 @@ void FixPEJump::init()
   others->refuse_for_rule(rule->name(), rule->node[rule->primary()] == 1.0, rule->only_end_nodes());
   others->warn_step_number(rule->name(), rule->node[rule->primary()] == 1.0,
                            rule->only_end_nodes());
+  others->warn_energy_inside_step(rule->name(), rule->node[rule->primary()] == 1.0);
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);

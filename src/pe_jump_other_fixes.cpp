@@ -85,6 +85,29 @@ void OtherFixes::sort(ForceSampler &sampler)
   sampler.set_hooks(preparations, projections);
 }
 
+/* ----------------------------------------------------------------------
+   fixes that add forces act at the primary node: with a rule whose primary
+   node is inside the step, the energy they add to pe (fix_modify energy
+   yes) is taken there, half a step before the step end where the force
+   field's energy is tallied (first order in the time step)
+------------------------------------------------------------------------- */
+
+void OtherFixes::warn_energy_inside_step(const std::string &rule_name, bool primary_at_end) const
+{
+  if (primary_at_end || (comm->me != 0)) return;
+  const std::string fixes = named([](Fix *fix) {
+    return (fix->setmask() & POST_FORCE) && fix->thermo_energy && fix->energy_global_flag &&
+        !replaces_forces(fix);
+  });
+  if (!fixes.empty())
+    error->warning(FLERR,
+                   "Fix {} with quadrature {}: the energy of {} (fix_modify energy yes) in pe, "
+                   "etotal and econserve is taken at the primary node inside the step, not at "
+                   "the step end: first order in the time step. The motion is second order; "
+                   "for the energy output use a Lobatto rule (e.g. quadrature lobatto 2)",
+                   self->style, rule_name, fixes);
+}
+
 /* ---------------------------------------------------------------------- */
 
 void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_end,

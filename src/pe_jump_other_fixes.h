@@ -80,6 +80,10 @@ namespace PEJump {
     void warn_step_number(const std::string &rule_name, bool primary_at_end,
                           bool only_end_nodes) const;
 
+    // a warning if fixes that add forces add their energy to pe (fix_modify
+    // energy yes) and the rule takes their forces inside the step
+    void warn_energy_inside_step(const std::string &rule_name, bool primary_at_end) const;
+
     // an error if atoms of this fix are integrated by another fix too
     // (collective; at init)
     void refuse_shared_atoms() const;

@@ -245,6 +245,36 @@ TEST(PEJumpOtherFixes, ForceFieldOfTheStepNumberWarns)
 }
 
 /* ----------------------------------------------------------------------
+   the energy of a force-adding fix with fix_modify energy yes enters pe at
+   the primary node: with midpoint (a spring/self on an LJ liquid) f_ss was
+   0.23, 0.11, 0.05 off fix nve's at h = 0.004, 0.002, 0.001 (first order,
+   etotal alike) without a word. A warning names the fix; none with a
+   Lobatto rule or without energy yes
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, EnergyOfForceFixesInsideTheStepWarns)
+{
+  const auto warned = [](const std::string &rule, bool energy) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s, 3);
+    s.cmds({"fix int all pe_jump quadrature " + rule, "fix ss all spring/self 2.0",
+            "fix push all addforce 0.1 0.0 0.0"});
+    if (energy) s.cmd("fix_modify ss energy yes");
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 2 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    return std::regex_search(out,
+                             std::regex("the energy of fix ss \\(spring/self\\) "
+                                        "\\(fix_modify energy yes\\)"));
+  };
+  EXPECT_TRUE(warned("midpoint", true));
+  EXPECT_TRUE(warned("legendre 2", true));
+  EXPECT_FALSE(warned("midpoint", false));
+  EXPECT_FALSE(warned("lobatto 3", true));
+  EXPECT_FALSE(warned("lobatto 2", true));
+}
+
+/* ----------------------------------------------------------------------
    forces that depend on the velocities (bond_style bpm/spring with
    damping; the styles that need comm_modify vel yes) drive the
    alternating mode of the jumps, which then grows at any time step
