@@ -249,23 +249,23 @@ void FixPEJump::setup(int /*vflag*/)
   scheme->agree_on_started(group_atoms(), style, (opts.compensate < 0) && !steps->adapts(),
                            nodes->tallied(true));
   nodes->ask_energy_at(update->laststep);    // for the next run to compare
-  if (!scheme->started) {
+  const int change = scheme->started ? scheme->velocity_change(group_atoms(), true) : 0;
+  const double pe = steps->adapts() ? potential_now() : 0.0;
+  if (!scheme->started || (change == 2)) steps->first_step(style, group_atoms(), atom->f, pe);
+  if (!scheme->started)
     start_scheme(nullptr, true);
-  } else {
-    const int change = scheme->velocity_change(group_atoms(), true);
-    if (change == 2)
-      start_scheme("velocities were changed since the last run: restarting the two-step scheme "
-                   "from the current positions and velocities",
-                   true);
-    else
-      refresh_start_nodes();
-    if ((change == 1) && (comm->me == 0))
-      utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
-                     style);
-  }
+  else if (change == 2)
+    start_scheme("velocities were changed since the last run: restarting the two-step scheme "
+                 "from the current positions and velocities",
+                 true);
+  else
+    refresh_start_nodes();
+  if ((change == 1) && (comm->me == 0))
+    utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
+                   style);
   scheme->fresh = 0;
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
-  if (steps->adapts()) steps->start_run(style, pseudo_energy_now());
+  if (steps->adapts()) steps->start_run(style, pe + scheme->energies(group_atoms())[0]);
   if (automatic) automatic->start_run(*nodes, opts.sample_mask);
 }
 
@@ -945,12 +945,21 @@ std::string FixPEJump::instability_advice() const
 
 double FixPEJump::pseudo_energy_now()
 {
+  return potential_now() + scheme->energies(group_atoms())[0];
+}
+
+/* ----------------------------------------------------------------------
+   potential energy at the current positions (one evaluation)
+------------------------------------------------------------------------- */
+
+double FixPEJump::potential_now()
+{
   double pe = nodes->potential(ForceSampler::ALL);
   if (force->pair && force->pair->tail_flag) {
     const double volume = domain->xprd * domain->yprd * domain->zprd;
     pe += force->pair->etail / volume;
   }
-  return pe + scheme->energies(group_atoms())[0];
+  return pe;
 }
 
 /* ---------------------------------------------------------------------- */

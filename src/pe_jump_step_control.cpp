@@ -22,6 +22,7 @@
 #include "pair.h"
 #include "pe_jump_atom_state.h"
 #include "update.h"
+#include "utils.h"
 
 #include <cmath>
 
@@ -106,6 +107,40 @@ void StepControl::start_run(const char *style, double pseudo_energy)
     set_timestep(dt);
   }
   energy_scale = fabs(pseudo_energy);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StepControl::first_step(const char *style, const AtomSet &set, double **f, double pe)
+{
+  if (!adapts()) return;
+  double **v = atom->v;
+  double local[2] = {0.0, 0.0}, sum[2];    // sum m |a|^2, sum m |v|^2
+  set.each(atom->mask, atom->nlocal, [&](int i) {
+    const double m = mass_of(i);
+    for (int k = 0; k < 3; k++) {
+      const double a = force->ftm2v * f[i][k] / m;
+      local[0] += m * a * a;
+      local[1] += m * v[i][k] * v[i][k];
+    }
+  });
+  MPI_Allreduce(local, sum, 2, MPI_DOUBLE, MPI_SUM, world);
+  const double kinetic = 0.5 * force->mvv2e * sum[1];
+  const double scale = MAX(fabs(pe + kinetic), kinetic);
+  const double target = 8.0 * ADAPT_SAFETY * eps * scale / force->mvv2e;
+  const double range = MIN(MAX(update->dt, dtmin), dtmax);
+  double dt = range;
+  if ((sum[0] > 0.0) && (dt * dt * sum[0] > target)) dt = MAX(sqrt(target / sum[0]), dtmin);
+  if (dt == update->dt) return;
+  if ((comm->me == 0) && (range != update->dt))
+    utils::logmesg(lmp, "Fix {}: timestep {} is outside the adapt range [{}, {}]: using {}\n",
+                   style, update->dt, dtmin, dtmax, range);
+  if ((comm->me == 0) && (dt != range))
+    utils::logmesg(lmp,
+                   "Fix {}: the first step takes {:.8g} instead of {:.8g}, so that the jump "
+                   "energy of the initial kick stays within the adapt bound\n",
+                   style, dt, range);
+  set_timestep(dt);
 }
 
 /* ----------------------------------------------------------------------

@@ -74,6 +74,13 @@ namespace PEJump {
     // adaptive bound is relative to the pseudo-energy E0 at the start
     void start_run(const char *style, double pseudo_energy);
 
+    // before the scheme starts with the kick [v]^0 = h F/m (f the forces at
+    // q^0, pe the potential energy there): the first step is the time step
+    // in range, or less if the kick's jump energy would exceed the share of
+    // the bound that choose_next() aims at (a larger first step would be
+    // cut at once, and the abrupt change excites the parasitic mode)
+    void first_step(const char *style, const AtomSet &set, double **f, double pe);
+
     // the atoms of set at the start of a step of size h: add the
     // compensation of the step-size change to their jumps ([v] and
     // v^{n+1/2}), using scratch (3 per owned atom) as work space;

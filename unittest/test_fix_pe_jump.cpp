@@ -1167,6 +1167,43 @@ TEST(PEJump, AdaptHoldsBoundAndStepGrowsBack)
   EXPECT_GT(dtmax / dtmin, 1.5);
 }
 
+// adapt started from a time step above what eps allows: the first step
+// is cut before the initial kick, so the error follows eps. Before, the
+// controller cut the step at once after a first step of the full size
+// (LJ liquid, 0.002 -> 0.0013 -> 0.00064 within two steps), and with
+// compensate yes the abrupt change excited the parasitic mode: the error
+// grew as eps shrank (1.2e-3 at eps 6.25e-5, 2.2e-3 at 1.5625e-5; fix nve
+// at 0.002 has 2.1e-4)
+TEST(PEJump, AdaptStartedAboveItsBoundConvergesWithEps)
+{
+  const auto liquid = [](Sim &s) {
+    s.cmds({"units lj", "atom_style charge", "atom_modify map array", "lattice fcc 0.8442",
+            "region box block 0 4 0 4 0 4", "create_box 1 box", "create_atoms 1 box", "mass 1 1.0",
+            "velocity all create 1.5 87287 loop geom", "pair_style lj/charmm/coul/charmm 2.0 2.5",
+            "pair_coeff 1 1 1.0 1.0", "neighbor 0.3 bin", "neigh_modify every 1 delay 0 check yes",
+            "timestep 0.005", "fix eq all nve", "run 400 post no", "unfix eq", "reset_timestep 0"});
+  };
+  const auto error_at = [&](double eps) {
+    Sim s;
+    liquid(s);
+    s.cmds({fmt::format("fix 1 all pe_jump adapt {} 1e-5 0.01", eps), "timestep 0.002",
+            "variable t equal time", "fix stop all halt 1 v_t >= 0.4 error continue", "thermo 0",
+            "run 100000 post no"});
+    const double tfinal = s.eval("time");
+    const auto x = unwrapped_positions(s);
+    Sim ref;
+    liquid(ref);
+    const int n = static_cast<int>(std::lround(tfinal / 1.25e-4));
+    ref.cmds({"fix 1 all nve", fmt::format("timestep {:.17g}", tfinal / n), "thermo 0",
+              fmt::format("run {} post no", n)});
+    return max_diff(x, unwrapped_positions(ref));
+  };
+  const double coarse = error_at(6.25e-5), fine = error_at(1.5625e-5);
+  std::cout << "adapt from dt 0.002: error " << coarse << " (eps 6.25e-5), " << fine
+            << " (eps 1.5625e-5)\n";
+  EXPECT_GT(coarse / fine, 2.5);
+}
+
 /* ----------------------------------------------------------------------
    bad input
 ------------------------------------------------------------------------- */
