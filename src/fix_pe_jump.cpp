@@ -266,6 +266,7 @@ void FixPEJump::setup(int /*vflag*/)
   scheme->fresh = 0;
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pe + scheme->energies(group_atoms())[0]);
+  if (damping->automatic_on()) note_damping();
   if (automatic) automatic->start_run(*nodes, opts.sample_mask);
 }
 
@@ -913,8 +914,24 @@ void FixPEJump::finish_check(const double *local)
       [&]() {
         return instability_advice();
       });
-  damping->impulse_anywhere(impulse > 0.0);
+  if (damping->impulse_anywhere(impulse > 0.0)) note_damping();
   if (rebuild) next_reneighbor = update->ntimestep;
+}
+
+/* ----------------------------------------------------------------------
+   damp auto damps from this step on (a thermostat acts): say so, since
+   the damping over a number of steps is first order in the time step
+------------------------------------------------------------------------- */
+
+void FixPEJump::note_damping() const
+{
+  if (comm->me == 0)
+    utils::logmesg(lmp,
+                   "Fix {}: damp auto damps the parasitic mode over {} steps from step {} (a "
+                   "thermostat acts): etotal, ecouple and econserve then change at first order in "
+                   "the time step; damp 0 turns the damping off, damp tau (time units) makes it "
+                   "second order\n",
+                   style, PEJump::ParasiticDamping::AUTO_STEPS, update->ntimestep);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -139,6 +139,7 @@ class FixPEJump : public Fix {
   void finish_check(const double *local);
   std::string instability_advice() const;
   void tally_at_node();
+  void note_damping() const;
   double potential_now();
   double pseudo_energy_now();
   void global_state(double *) const;

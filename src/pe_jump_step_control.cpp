@@ -60,10 +60,12 @@ int ParasiticDamping::take_impulse()
 
 /* ---------------------------------------------------------------------- */
 
-void ParasiticDamping::impulse_anywhere(bool seen)
+bool ParasiticDamping::impulse_anywhere(bool seen)
 {
   if (seen && thermostatted) ever_changed = true;
+  const bool was = on;
   if (seen && automatic && thermostatted) on = true;
+  return on && !was;
 }
 
 /* ---------------------------------------------------------------------- */

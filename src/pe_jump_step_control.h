@@ -43,9 +43,11 @@ namespace PEJump {
     // that thermostat this fix's atoms (forcing: one of them adds forces)
     void init(double damp_time, double dt, bool thermostats, bool forcing);
     void impulse_here() { impulse = 1; }
-    int take_impulse();                  // this rank's impulse flag, cleared
-    void impulse_anywhere(bool seen);    // the flag reduced over the ranks
+    int take_impulse();    // this rank's impulse flag, cleared
+    // the flag reduced over the ranks; true if it turns damp auto on
+    bool impulse_anywhere(bool seen);
     bool active() const { return on; }
+    bool automatic_on() const { return automatic && on; }
     double beta(double h) const;
 
     // whether velocities were changed by another fix beside a thermostat

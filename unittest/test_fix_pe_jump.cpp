@@ -490,6 +490,36 @@ LAMMPS_NS::Fix *stop_at_creator(LAMMPS_NS::LAMMPS *lmp, int narg, char **arg)
 }    // namespace
 
 /* ----------------------------------------------------------------------
+   damp auto damps beside a thermostat, over 1000 steps: first order in the
+   time step, which shows in econserve (LJ liquid with temp/berendsen:
+   drift 1.07, 0.38, 0.15 as h halves; damp 0: 0.63, 0.16, 0.04). The log
+   says when it starts, once; nothing where it does not damp
+------------------------------------------------------------------------- */
+
+TEST(PEJump, DampAutoSaysWhenItDamps)
+{
+  const auto told = [](const std::string &rule, const std::string &other) {
+    Sim s(MPI_COMM_WORLD, false);
+    lj_liquid(s, 3);
+    s.cmds({"fix int all pe_jump quadrature " + rule, "fix other all " + other, "thermo 0"});
+    ::testing::internal::CaptureStdout();
+    s.cmd("run 30 post no");
+    const std::string out = ::testing::internal::GetCapturedStdout();
+    std::smatch m;
+    const std::regex said("damp auto damps the parasitic mode over 1000 steps from step (\\d+)");
+    if (!std::regex_search(out, m, said)) return -1;
+    const int step = std::stoi(m[1]);
+    const std::string rest = m.suffix();
+    return std::regex_search(rest, said) ? -2 : step;    // -2: said twice
+  };
+  EXPECT_EQ(told("midpoint", "langevin 1.0 1.0 0.5 4711"), 0);
+  EXPECT_GT(told("lobatto 3", "temp/berendsen 1.0 1.0 0.1"), 0);    // at its first change
+  EXPECT_EQ(told("midpoint", "momentum 5 linear 1 1 1"), -1);
+  EXPECT_EQ(told("lobatto 2", "langevin 1.0 1.0 0.5 4711"), -1);
+  EXPECT_EQ(told("midpoint damp 0", "langevin 1.0 1.0 0.5 4711"), -1);
+}
+
+/* ----------------------------------------------------------------------
    a run stopped from inside a step ends at that step's node, exactly as
    a run of that many steps, also where the fix begins steps ahead
 ------------------------------------------------------------------------- */
