@@ -956,16 +956,6 @@ std::string FixPEJump::instability_advice() const
 }
 
 /* ----------------------------------------------------------------------
-   pseudo-energy V(q^n) + pseudo-kinetic energy at the current positions;
-   evaluates the energy once (used at setup for the adapt normalisation)
-------------------------------------------------------------------------- */
-
-double FixPEJump::pseudo_energy_now()
-{
-  return potential_now() + scheme->energies(group_atoms())[0];
-}
-
-/* ----------------------------------------------------------------------
    potential energy at the current positions (one evaluation)
 ------------------------------------------------------------------------- */
 

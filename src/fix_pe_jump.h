@@ -141,7 +141,6 @@ class FixPEJump : public Fix {
   void tally_at_node();
   void note_damping() const;
   double potential_now();
-  double pseudo_energy_now();
   void global_state(double *) const;
 
   // apply one(i) to the owned atoms of the group
