@@ -217,6 +217,13 @@ void FixPEJump::init()
   others->warn_step_number(rule->name(), rule->node[rule->primary()] == 1.0,
                            rule->only_end_nodes());
   others->warn_energy_inside_step(rule->name(), rule->node[rule->primary()] == 1.0);
+  if (rule->node[rule->primary()] != 1.0)
+    nodes->refuse_tally_computes(
+        style,
+        fmt::format("with quadrature {} this fix evaluates the force field at the "
+                    "primary node inside the step and again at the step end on steps "
+                    "that tally energy or virial",
+                    rule->name()));
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
@@ -266,7 +273,7 @@ void FixPEJump::setup(int /*vflag*/)
   scheme->fresh = 0;
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pe + scheme->energies(group_atoms())[0]);
-  if (damping->automatic_on()) note_damping();
+  if (damping->automatic_on()) note_damping(false);
   if (automatic) automatic->start_run(*nodes, opts.sample_mask);
 }
 
@@ -509,7 +516,7 @@ AtomSet FixPEJump::group_atoms() const
 void FixPEJump::check_lists()
 {
   const int first = rule->has_end_nodes() ? 1 : 0;
-  const double c_hi = nodes->tally_step() ? 1.0 : rule->node.back();
+  const double c_hi = nodes->step_end_evaluated() ? 1.0 : rule->node.back();
   check_excursion(rule->node[first] * h_step, c_hi * h_step);
 }
 
@@ -914,24 +921,27 @@ void FixPEJump::finish_check(const double *local)
       [&]() {
         return instability_advice();
       });
-  if (damping->impulse_anywhere(impulse > 0.0)) note_damping();
+  if (damping->impulse_anywhere(impulse > 0.0)) note_damping(true);
   if (rebuild) next_reneighbor = update->ntimestep;
 }
 
 /* ----------------------------------------------------------------------
-   damp auto damps from this step on (a thermostat acts): say so, since
-   the damping over a number of steps is first order in the time step
+   damp auto damps in this run, or from this step on (a thermostat acts):
+   say so, since the damping over a number of steps is first order in the
+   time step
 ------------------------------------------------------------------------- */
 
-void FixPEJump::note_damping() const
+void FixPEJump::note_damping(bool from_now) const
 {
-  if (comm->me == 0)
-    utils::logmesg(lmp,
-                   "Fix {}: damp auto damps the parasitic mode over {} steps from step {} (a "
-                   "thermostat acts): etotal, ecouple and econserve then change at first order in "
-                   "the time step; damp 0 turns the damping off, damp tau (time units) makes it "
-                   "second order\n",
-                   style, PEJump::ParasiticDamping::AUTO_STEPS, update->ntimestep);
+  if (comm->me != 0) return;
+  const std::string when = from_now ? fmt::format("from step {}", update->ntimestep)
+                                    : std::string("in this run");
+  utils::logmesg(lmp,
+                 "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat "
+                 "acts): etotal, ecouple and econserve then change at first order in the time "
+                 "step; damp 0 turns the damping off, damp tau (time units) makes it second "
+                 "order\n",
+                 style, PEJump::ParasiticDamping::AUTO_STEPS, when);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -139,7 +139,7 @@ class FixPEJump : public Fix {
   void finish_check(const double *local);
   std::string instability_advice() const;
   void tally_at_node();
-  void note_damping() const;
+  void note_damping(bool from_now) const;
   double potential_now();
   void global_state(double *) const;
 

@@ -212,6 +212,10 @@ void FixPEJumpAsync::init()
   sampler->refuse_velocity_forces(style, rule->name(), false);
   refuse_unsplittable();
   refuse_other_fixes();
+  nodes->refuse_tally_computes(style,
+                               "on steps that tally energy or virial this fix evaluates the fine "
+                               "interactions at their primary node and every interaction at the "
+                               "step end");
   first->refuse_unsupported(style);
   if (first->active() && assign->follows_group())
     error->all(FLERR,
@@ -463,7 +467,7 @@ void FixPEJumpAsync::all_to_primary_node(double t)
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   const StabilityGuard::Nodes at{h_step,
                                  c_lo * h_step,
-                                 (nodes->tally_step() ? 1.0 : rule->node.back()) * h_step,
+                                 (nodes->step_end_evaluated() ? 1.0 : rule->node.back()) * h_step,
                                  t,
                                  assign->slow(),
                                  c_lo * span - elapsed,
@@ -1093,7 +1097,7 @@ void FixPEJumpAsync::check_lists()
 {
   const int first_node = rule->has_end_nodes() ? 1 : 0;
   const double c_lo = rule->node[first_node];
-  const bool tally = nodes->tally_step();
+  const bool tally = nodes->step_end_evaluated();
   const double c_hi = tally ? 1.0 : rule->node.back();
   // atoms opened ahead are at the primary node already: the nodes from there
   const double from = opened_ahead ? rule->node[rule->primary()] : 0.0;

@@ -233,6 +233,26 @@ bool NodeSampler::forces_dumped() const
   return false;
 }
 
+/* ----------------------------------------------------------------------
+   the computes of the TALLY package (pe/tally, force/tally, stress/tally,
+   heat/flux/tally, ...) add up what every evaluation of the pair style in
+   a step tallies: on steps that tally energy or virial the MD step's
+   evaluation tallies (at the primary node: where the fix evaluates again
+   at the step end, at_step_end(), they would count two evaluations)
+------------------------------------------------------------------------- */
+
+void NodeSampler::refuse_tally_computes(const char *style, const std::string &why) const
+{
+  for (auto *compute : modify->get_compute_list())
+    if (utils::strmatch(compute->style, "/tally$"))
+      error->all(FLERR,
+                 "Fix {}: compute {} ({}) adds up the pair tallies of every force evaluation "
+                 "in a step, and {}, so it would count pairs twice. Use compute pair, pe/atom, "
+                 "stress/atom or group/group instead{}",
+                 style, compute->id, compute->style, why,
+                 utils::strmatch(style, "async") ? "" : ", or a Lobatto rule");
+}
+
 /* ---------------------------------------------------------------------- */
 
 void NodeSampler::ghosts_with_owned(bool observed)

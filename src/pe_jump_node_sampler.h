@@ -17,6 +17,7 @@
 #include "pe_jump_force_sampler.h"
 #include "pointers.h"
 
+#include <string>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -120,10 +121,17 @@ namespace PEJump {
     // which another time integrator of theirs applies after this fix
     double at_step_end(bool observed, int groupbit);
     bool tally_step() const;    // the step about to begin tallies energy or virial
+    // the step about to begin ends with an evaluation of everything
+    // (at_step_end(): energy or virial tallied, or forces dumped)
+    bool step_end_evaluated() const { return tally_step() || forces_dumped(); }
     // the step ends at the primary node, evaluated by the MD step: if nodes
     // were evaluated since, the ghosts are still at the last of them; on
     // observed steps bring them to where the owned atoms are
     void ghosts_with_owned(bool observed);
+    // an error if a compute adds up the pair tallies of all evaluations of
+    // a step (the TALLY package), which the evaluation at the step end
+    // would double; why: when the fix evaluates there
+    void refuse_tally_computes(const char *style, const std::string &why) const;
 
     // potential energy of the contributions in mask at the current
     // positions (one evaluation; the forces are kept)

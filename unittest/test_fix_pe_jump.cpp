@@ -498,25 +498,28 @@ LAMMPS_NS::Fix *stop_at_creator(LAMMPS_NS::LAMMPS *lmp, int narg, char **arg)
 
 TEST(PEJump, DampAutoSaysWhenItDamps)
 {
-  const auto told = [](const std::string &rule, const std::string &other) {
+  // what the log says about damp auto over one run (or two): "" if nothing
+  const auto told = [](const std::string &rule, const std::string &other, int runs) {
     Sim s(MPI_COMM_WORLD, false);
     lj_liquid(s, 3);
     s.cmds({"fix int all pe_jump quadrature " + rule, "fix other all " + other, "thermo 0"});
     ::testing::internal::CaptureStdout();
-    s.cmd("run 30 post no");
+    for (int run = 0; run < runs; ++run) s.cmd("run 30 post no");
     const std::string out = ::testing::internal::GetCapturedStdout();
-    std::smatch m;
-    const std::regex said("damp auto damps the parasitic mode over 1000 steps from step (\\d+)");
-    if (!std::regex_search(out, m, said)) return -1;
-    const int step = std::stoi(m[1]);
-    const std::string rest = m.suffix();
-    return std::regex_search(rest, said) ? -2 : step;    // -2: said twice
+    std::string said;
+    const std::regex note("damp auto damps the parasitic mode over 1000 steps ((from step \\d+)|"
+                          "in this run)");
+    for (auto it = std::sregex_iterator(out.begin(), out.end(), note); it != std::sregex_iterator();
+         ++it)
+      said += (said.empty() ? "" : "; ") + (*it)[1].str();
+    return said;
   };
-  EXPECT_EQ(told("midpoint", "langevin 1.0 1.0 0.5 4711"), 0);
-  EXPECT_GT(told("lobatto 3", "temp/berendsen 1.0 1.0 0.1"), 0);    // at its first change
-  EXPECT_EQ(told("midpoint", "momentum 5 linear 1 1 1"), -1);
-  EXPECT_EQ(told("lobatto 2", "langevin 1.0 1.0 0.5 4711"), -1);
-  EXPECT_EQ(told("midpoint damp 0", "langevin 1.0 1.0 0.5 4711"), -1);
+  EXPECT_EQ(told("midpoint", "langevin 1.0 1.0 0.5 4711", 1), "in this run");
+  // from the thermostat's first change on; a second run goes on damping
+  EXPECT_EQ(told("lobatto 3", "temp/berendsen 1.0 1.0 0.1", 2), "from step 2; in this run");
+  EXPECT_EQ(told("midpoint", "momentum 5 linear 1 1 1", 1), "");
+  EXPECT_EQ(told("lobatto 2", "langevin 1.0 1.0 0.5 4711", 1), "");
+  EXPECT_EQ(told("midpoint damp 0", "langevin 1.0 1.0 0.5 4711", 1), "");
 }
 
 /* ----------------------------------------------------------------------
@@ -1068,6 +1071,81 @@ TEST(PEJump, GhostAtomsAreAtTheStepEndOnOutputSteps)
     s.cmds({"unfix 1", "run 0 post no"});
     EXPECT_NEAR(pairs, evdwl, 1e-10 * std::fabs(evdwl)) << rule;
     EXPECT_NEAR(between, s.eval("c_gg"), 1e-10 * std::fabs(between)) << rule;
+  }
+}
+
+// a pair that comes within the cutoff in the last part of a dump step:
+// the lists are checked up to the step end, where the dumped forces are
+// evaluated (two atoms closing head-on; the dumped force was 0 instead of
+// the LJ force 0.0402 at r = 2.489 with midpoint, legendre 1 and
+// pe_jump/async, the lists being checked up to the last node only)
+TEST(PEJump, DumpedForcesSeePairsThatEnterTheCutoffInTheStep)
+{
+  for (const std::string fix : {"pe_jump", "pe_jump quadrature legendre 1", "pe_jump/async 1 b",
+                                "pe_jump/async 2 all", "pe_jump quadrature lobatto 2"}) {
+    Sim s;
+    const std::string file = "pe_jump_pair_enters.dump";
+    s.cmds({"units lj",
+            "atom_style atomic",
+            "atom_modify map array",
+            "boundary p p p",
+            "region box block 0 20 0 20 0 20",
+            "create_box 1 box",
+            "create_atoms 1 single 5.0 10 10 units box",
+            "create_atoms 1 single 7.81 10 10 units box",
+            "mass 1 1.0",
+            "pair_style lj/cut 2.5",
+            "pair_coeff 1 1 1.0 1.0 2.5",
+            "neighbor 0.3 bin",
+            "neigh_modify every 1 delay 0 check yes",
+            "group a id 1",
+            "group b id 2",
+            "velocity a set 2.2923 0 0",
+            "velocity b set -2.2923 0 0",
+            "timestep 0.01",
+            "fix 1 all " + fix,
+            "thermo 0",
+            "dump d all custom 7 " + file + " id x fx",
+            "dump_modify d sort id format float %.17g",
+            "run 9 post no"});
+    // step 7 dumps and tallies nothing (thermo at steps 0 and 9 only)
+    double x[2] = {0.0, 0.0}, fx[2] = {0.0, 0.0};
+    std::ifstream in(file);
+    std::string line;
+    while (std::getline(in, line) && (line != "7")) continue;
+    while (std::getline(in, line) && (line.rfind("ITEM: ATOMS", 0) != 0)) continue;
+    for (int n = 0; n < 2 && std::getline(in, line); ++n) {
+      std::istringstream row(line);
+      int id;
+      row >> id >> x[n] >> fx[n];
+    }
+    std::remove(file.c_str());
+    const double r = x[1] - x[0];
+    const double lj = 24.0 * (2.0 * std::pow(r, -13) - std::pow(r, -7));
+    ASSERT_LT(r, 2.5) << fix;
+    EXPECT_NEAR(fx[1], lj, 1e-12) << fix << " r " << r;
+  }
+}
+
+// the computes of the TALLY package add up the pair tallies of every
+// evaluation in a step: with a Lobatto rule only the MD step's evaluation
+// at the step end tallies, and compute pe/tally equals evdwl (midpoint and
+// Legendre rules, which evaluate again at the step end, counted every pair
+// twice: -3329.5 against evdwl -1660.5, and are refused, bad_inputs.txt)
+TEST(PEJump, TallyComputesCountEveryPairOnceWithLobattoRules)
+{
+  for (const std::string rule : {"lobatto 2", "lobatto 3", "lobatto 5", "auto 1e-6"}) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"fix 1 all pe_jump quadrature " + rule, "timestep 0.004", "compute pt all pe/tally all",
+            "compute st all stress/tally all", "compute sts all reduce sum c_st[1]",
+            "compute sa all stress/atom NULL pair", "compute sas all reduce sum c_sa[1]",
+            "thermo_style custom step evdwl c_pt c_sts c_sas", "thermo_modify norm no", "thermo 10",
+            "run 30 post no"});
+    const double evdwl = s.eval("evdwl");
+    EXPECT_NEAR(s.eval("c_pt"), evdwl, 1e-10 * std::fabs(evdwl)) << rule;
+    const double stress = s.eval("c_sas");
+    EXPECT_NEAR(s.eval("c_sts"), stress, 1e-10 * std::fabs(stress)) << rule;
   }
 }
 
