@@ -218,11 +218,11 @@ void FixPEJump::init()
                            rule->only_end_nodes());
   others->warn_energy_inside_step(rule->name(), rule->node[rule->primary()] == 1.0);
   if (rule->node[rule->primary()] != 1.0)
-    nodes->refuse_tally_computes(
+    nodes->refuse_step_end_side_effects(
         style,
         fmt::format("with quadrature {} this fix evaluates the force field at the "
                     "primary node inside the step and again at the step end on steps "
-                    "that tally energy or virial",
+                    "that tally energy or virial or dump forces",
                     rule->name()));
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))

@@ -212,10 +212,10 @@ void FixPEJumpAsync::init()
   sampler->refuse_velocity_forces(style, rule->name(), false);
   refuse_unsplittable();
   refuse_other_fixes();
-  nodes->refuse_tally_computes(style,
-                               "on steps that tally energy or virial this fix evaluates the fine "
-                               "interactions at their primary node and every interaction at the "
-                               "step end");
+  nodes->refuse_step_end_side_effects(
+      style,
+      "on steps that tally energy or virial or dump forces this fix evaluates the fine "
+      "interactions at their primary node and every interaction at the step end");
   first->refuse_unsupported(style);
   if (first->active() && assign->follows_group())
     error->all(FLERR,

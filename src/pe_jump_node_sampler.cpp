@@ -14,6 +14,7 @@
 #include "pe_jump_node_sampler.h"
 
 #include "atom.h"
+#include "bond.h"
 #include "comm.h"
 #include "compute.h"
 #include "dump.h"
@@ -234,23 +235,35 @@ bool NodeSampler::forces_dumped() const
 }
 
 /* ----------------------------------------------------------------------
-   the computes of the TALLY package (pe/tally, force/tally, stress/tally,
-   heat/flux/tally, ...) add up what every evaluation of the pair style in
-   a step tallies: on steps that tally energy or virial the MD step's
-   evaluation tallies (at the primary node: where the fix evaluates again
-   at the step end, at_step_end(), they would count two evaluations)
+   what an evaluation of the force field changes besides the forces, where
+   the fix evaluates it twice on output steps (at the primary node inside
+   the step and at the step end, at_step_end()): the computes of the TALLY
+   package add up the pair tallies of every evaluation in a step (they
+   would count pairs twice), and bonds that break inside their evaluation
+   (bond styles with partial_flag, peridynamic partner lists) would break
+   where output looks (the trajectory would depend on the output)
 ------------------------------------------------------------------------- */
 
-void NodeSampler::refuse_tally_computes(const char *style, const std::string &why) const
+void NodeSampler::refuse_step_end_side_effects(const char *style, const std::string &why) const
 {
+  const std::string other = utils::strmatch(style, "async") ? "" : ", or a Lobatto rule";
   for (auto *compute : modify->get_compute_list())
     if (utils::strmatch(compute->style, "/tally$"))
       error->all(FLERR,
                  "Fix {}: compute {} ({}) adds up the pair tallies of every force evaluation "
                  "in a step, and {}, so it would count pairs twice. Use compute pair, pe/atom, "
                  "stress/atom or group/group instead{}",
-                 style, compute->id, compute->style, why,
-                 utils::strmatch(style, "async") ? "" : ", or a Lobatto rule");
+                 style, compute->id, compute->style, why, other);
+  const bool breaks = (force->bond && force->bond->partial_flag) || atom->peri_flag;
+  if (breaks)
+    error->all(FLERR,
+               "Fix {}: {} break bonds inside the force evaluation, and {}, so output would "
+               "break bonds that a run without output keeps. Use quadrature lobatto 2 or 3",
+               style,
+               atom->peri_flag
+                   ? fmt::format("the peridynamic interactions of pair style {}", force->pair_style)
+                   : fmt::format("the bonds of bond style {}", force->bond_style),
+               why);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -128,10 +128,11 @@ namespace PEJump {
     // were evaluated since, the ghosts are still at the last of them; on
     // observed steps bring them to where the owned atoms are
     void ghosts_with_owned(bool observed);
-    // an error if a compute adds up the pair tallies of all evaluations of
-    // a step (the TALLY package), which the evaluation at the step end
-    // would double; why: when the fix evaluates there
-    void refuse_tally_computes(const char *style, const std::string &why) const;
+    // an error if an evaluation at the step end besides the one inside
+    // the step would change more than the forces: computes that add up the
+    // pair tallies of all evaluations of a step (the TALLY package), bonds
+    // that break inside the evaluation; why: when the fix evaluates there
+    void refuse_step_end_side_effects(const char *style, const std::string &why) const;
 
     // potential energy of the contributions in mask at the current
     // positions (one evaluation; the forces are kept)

@@ -1127,6 +1127,51 @@ TEST(PEJump, DumpedForcesSeePairsThatEnterTheCutoffInTheStep)
   }
 }
 
+// bonds that break inside the force evaluation (bond style quartic, the
+// peridynamic partner lists): with Lobatto rules every evaluation of a
+// step is made whatever the output, and a run with thermo output at every
+// step equals one without; midpoint and Legendre rules evaluate again at
+// the step end on output steps, which broke bonds that the run without
+// output kept (400-atom 2d quartic network, midpoint: 0.87 apart after
+// 2000 steps with thermo 1 against thermo 1000), and are refused
+TEST(PEJump, BreakableBondsDoNotDependOnTheOutput)
+{
+  const auto network = [](const std::string &rule, int thermo) {
+    Sim s;
+    s.cmds({"units lj", "atom_style bond", "atom_modify map array", "dimension 2",
+            "lattice sq 0.85", "region box block 0 20 0 20 -0.5 0.5",
+            "create_box 1 box bond/types 1 extra/bond/per/atom 4", "create_atoms 1 box",
+            "mass 1 1.0", "pair_style lj/cut 1.12", "pair_coeff * * 1.0 1.0",
+            "pair_modify shift yes", "special_bonds lj 0 1 1", "bond_style harmonic",
+            "bond_coeff 1 1.0 1.0", "create_bonds many all all 1 1.0 1.1",
+            "special_bonds lj 1 1 1", "bond_style quartic",
+            "bond_coeff 1 1200 -0.55 0.25 1.3 34.6878", "velocity all create 2.5 4711 dist gaussian",
+            "neighbor 0.4 bin", "fix 1 all pe_jump quadrature " + rule, "fix 2 all enforce2d",
+            "timestep 0.003", fmt::format("thermo {}", thermo), "run 600 post no"});
+    return unwrapped_positions(s);
+  };
+  for (const std::string rule : {"lobatto 2", "lobatto 3"})
+    EXPECT_LT(max_diff(network(rule, 1), network(rule, 1000)), 1e-10) << rule;
+  for (const std::string rule : {"midpoint", "legendre 2"}) {
+    try {
+      network(rule, 1);
+      ADD_FAILURE() << rule << " beside bonds that break was not refused";
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      EXPECT_THAT(e.what(), ContainsRegex("the bonds of bond style quartic break bonds inside "
+                                          "the force evaluation"))
+          << rule;
+    }
+  }
+  EXPECT_THAT(
+      error_of({"units si", "atom_style peri", "atom_modify map array", "lattice sc 0.0005",
+                "region target block 0 4 0 4 0 4", "create_box 1 target",
+                "create_atoms 1 region target", "pair_style peri/pmb",
+                "pair_coeff * * 1.6863e22 0.0015001 0.0005 0.25", "set group all density 2200",
+                "set group all volume 1.25e-10", "fix 1 all pe_jump", "timestep 1e-7"},
+               "run 1"),
+      ContainsRegex("the peridynamic interactions of pair style peri/pmb break bonds"));
+}
+
 // the computes of the TALLY package add up the pair tallies of every
 // evaluation in a step: with a Lobatto rule only the MD step's evaluation
 // at the step end tallies, and compute pe/tally equals evdwl (midpoint and
