@@ -227,9 +227,14 @@ double NodeSampler::at_step_end(bool observed, int groupbit)
 
 bool NodeSampler::forces_dumped() const
 {
+  const auto without_forces = [](const char *style) {
+    for (const char *pattern :
+         {"^atom", "^xyz", "^dcd", "^xtc", "^image", "^movie", "^local", "^grid"})
+      if (utils::strmatch(style, pattern)) return true;
+    return false;
+  };
   for (int i = 0; i < output->ndump; i++)
-    if ((output->next_dump[i] == update->ntimestep) &&
-        !utils::strmatch(output->dump[i]->style, "^(atom|xyz|dcd|xtc|image|movie|local|grid)"))
+    if ((output->next_dump[i] == update->ntimestep) && !without_forces(output->dump[i]->style))
       return true;
   return false;
 }

@@ -1138,16 +1138,32 @@ TEST(PEJump, BreakableBondsDoNotDependOnTheOutput)
 {
   const auto network = [](const std::string &rule, int thermo) {
     Sim s;
-    s.cmds({"units lj", "atom_style bond", "atom_modify map array", "dimension 2",
-            "lattice sq 0.85", "region box block 0 20 0 20 -0.5 0.5",
-            "create_box 1 box bond/types 1 extra/bond/per/atom 4", "create_atoms 1 box",
-            "mass 1 1.0", "pair_style lj/cut 1.12", "pair_coeff * * 1.0 1.0",
-            "pair_modify shift yes", "special_bonds lj 0 1 1", "bond_style harmonic",
-            "bond_coeff 1 1.0 1.0", "create_bonds many all all 1 1.0 1.1",
-            "special_bonds lj 1 1 1", "bond_style quartic",
-            "bond_coeff 1 1200 -0.55 0.25 1.3 34.6878", "velocity all create 2.5 4711 dist gaussian",
-            "neighbor 0.4 bin", "fix 1 all pe_jump quadrature " + rule, "fix 2 all enforce2d",
-            "timestep 0.003", fmt::format("thermo {}", thermo), "run 600 post no"});
+    s.cmds({"units lj",
+            "atom_style bond",
+            "atom_modify map array",
+            "dimension 2",
+            "lattice sq 0.85",
+            "region box block 0 20 0 20 -0.5 0.5",
+            "create_box 1 box bond/types 1 extra/bond/per/atom 4",
+            "create_atoms 1 box",
+            "mass 1 1.0",
+            "pair_style lj/cut 1.12",
+            "pair_coeff * * 1.0 1.0",
+            "pair_modify shift yes",
+            "special_bonds lj 0 1 1",
+            "bond_style harmonic",
+            "bond_coeff 1 1.0 1.0",
+            "create_bonds many all all 1 1.0 1.1",
+            "special_bonds lj 1 1 1",
+            "bond_style quartic",
+            "bond_coeff 1 1200 -0.55 0.25 1.3 34.6878",
+            "velocity all create 2.5 4711 dist gaussian",
+            "neighbor 0.4 bin",
+            "fix 1 all pe_jump quadrature " + rule,
+            "fix 2 all enforce2d",
+            "timestep 0.003",
+            fmt::format("thermo {}", thermo),
+            "run 600 post no"});
     return unwrapped_positions(s);
   };
   for (const std::string rule : {"lobatto 2", "lobatto 3"})
@@ -1157,8 +1173,9 @@ TEST(PEJump, BreakableBondsDoNotDependOnTheOutput)
       network(rule, 1);
       ADD_FAILURE() << rule << " beside bonds that break was not refused";
     } catch (LAMMPS_NS::LAMMPSException &e) {
-      EXPECT_THAT(e.what(), ContainsRegex("the bonds of bond style quartic break bonds inside "
-                                          "the force evaluation"))
+      EXPECT_THAT(e.what(),
+                  ContainsRegex("the bonds of bond style quartic break bonds inside "
+                                "the force evaluation"))
           << rule;
     }
   }
@@ -1236,6 +1253,18 @@ TEST(PEJump, DumpedForcesAreThoseAtTheDumpedPositions)
       }
     EXPECT_LT(worst, 1e-10 * scale) << fix;
   }
+  // dumps of positions only cost no evaluation: 20 steps, a dump every 5
+  // (the last step tallies energy anyway)
+  const auto evaluations = [](const std::string &dump) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"fix 1 all pe_jump", "timestep 0.004", "thermo 100", dump, "run 20 post no"});
+    return s.vec("1", 4);
+  };
+  EXPECT_EQ(evaluations("dump d all atom 5 pe_jump_positions.dump"), 21.0);
+  EXPECT_EQ(evaluations("dump d all xyz 5 pe_jump_positions.dump"), 21.0);
+  EXPECT_EQ(evaluations("dump d all custom 5 pe_jump_positions.dump id fx"), 24.0);
+  std::remove("pe_jump_positions.dump");
 }
 
 /* ----------------------------------------------------------------------
