@@ -916,7 +916,7 @@ void FixPEJump::finish_check(const double *local)
   const bool rebuild = guard->conclude(
       style, local, impulse,
       [&]() {
-        return scheme->energies(group_atoms())[1];
+        return scheme->energies(group_atoms());
       },
       [&]() {
         return instability_advice();

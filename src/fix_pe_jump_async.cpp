@@ -1143,7 +1143,7 @@ void FixPEJumpAsync::finish_check(const double *local)
   if (guard->conclude(
           style, local, none,
           [&]() {
-            return scheme->energies(group_atoms())[1];
+            return scheme->energies(group_atoms());
           },
           [&]() {
             return instability_advice();

@@ -120,10 +120,11 @@ namespace PEJump {
 
     // reduce the local measures and one more value (flag: in local, out
     // global, MAX) over the ranks and act on the verdict: an error if the
-    // scheme is unstable (the message gives jump_energy() and advice()) or
-    // atoms move too far; true if a list rebuild is due
+    // scheme is unstable or atoms move too far; true if a list rebuild is
+    // due. energies() gives the pseudo-kinetic and the jump energy of the
+    // group (TwoStep::energies, collective), advice() the hint of the error
     bool conclude(const char *style, const double *local, double &flag,
-                  const std::function<double()> &jump_energy,
+                  const std::function<const double *()> &energies,
                   const std::function<std::string()> &advice);
 
    private:

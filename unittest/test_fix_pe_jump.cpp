@@ -417,6 +417,56 @@ TEST(PEJump, InstabilityDetectedJustAboveCflLimit)
     }
 }
 
+// a run that starts at rest and is loaded later: the jumps grow with the
+// forces by any factor, which is no instability while they carry a
+// negligible share of the kinetic energy. LAMMPS' peri example (an
+// indenter into a peri/pmb cylinder, h = 1.25e-8) stopped at step 1172 as
+// "unstable" with lobatto 2 (velocity Verlet, as fix nve, which ran on):
+// the jumps had grown 1.05e6-fold from the first contact. It runs now and
+// follows fix nve; a ring loaded from rest beyond the stability limit is
+// still stopped
+TEST(PEJump, LoadFromRestIsNoInstability)
+{
+  const auto indentation = [](const std::string &fix) {
+    Sim s;
+    s.cmds({"units si",
+            "boundary s s s",
+            "atom_style peri",
+            "atom_modify map array",
+            "neighbor 0.0010 bin",
+            "lattice sc 0.0005",
+            "region target cylinder y 0.0 0.0 0.0030 -0.0030 0.0 units box",
+            "create_box 1 target",
+            "create_atoms 1 region target",
+            "pair_style peri/pmb",
+            "pair_coeff * * 1.6863e22 0.0015001 0.0005 0.25",
+            "set group all density 2200",
+            "set group all volume 1.25e-10",
+            "velocity all set 0.0 0.0 0.0 sum no units box",
+            "fix 1 all " + fix,
+            "variable y equal 0.00155-200*time",
+            "fix 2 all indent 1e17 sphere 0.0 v_y 0.0 0.0015 units box",
+            "timestep 1.25e-8",
+            "thermo 0",
+            "run 1300 post no"});
+    return s.eval("ke");
+  };
+  const double nve = indentation("nve");
+  EXPECT_NEAR(indentation("pe_jump quadrature lobatto 2"), nve, 1e-9 * nve);
+
+  Sim s;
+  harmonic_ring(s, 10, 50.0, 0.0, 3);
+  s.cmds({"fix 1 all pe_jump", "variable push equal (time>1.0)*0.1", "group one id 1",
+          "fix 2 one addforce v_push 0.0 0.0", "timestep 0.102", "thermo 0"});
+  std::string msg = "no error";
+  try {
+    s.cmd("run 20000 post no");
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    msg = e.what();
+  }
+  EXPECT_THAT(msg, ContainsRegex("Fix pe_jump is unstable at step [0-9]+"));
+}
+
 /* ----------------------------------------------------------------------
    split runs and restarts reproduce an unbroken run
 ------------------------------------------------------------------------- */
