@@ -189,6 +189,7 @@ void FixPEJump::init()
 
   others->sort(*sampler);
   sampler->refuse_velocity_forces(style, rule->name(), rule->only_end_nodes());
+  sampler->refuse_stateful_forces(style, rule->name(), rule->only_end_nodes());
   maxexchange = state->values();
 
   // forces that the rule does not integrate (other fixes that add forces,

@@ -84,6 +84,26 @@ void ForceSampler::refuse_velocity_forces(const char *style, const std::string &
              style, rule);
 }
 
+/* ----------------------------------------------------------------------
+   peridynamic pair styles advance per-bond state at every evaluation:
+   damage (broken bonds, the critical stretch), and with peri/ves and
+   peri/eps the viscoelastic and plastic history by a whole time step.
+   Only a rule that evaluates once per step, at the step end, keeps it
+------------------------------------------------------------------------- */
+
+void ForceSampler::refuse_stateful_forces(const char *style, const std::string &rule,
+                                          bool end_nodes) const
+{
+  if (!atom->peri_flag || end_nodes) return;
+  error->all(FLERR,
+             "Fix {} with quadrature {}: pair style {} advances the state of its bonds at every "
+             "force evaluation (broken bonds, and the viscoelastic or plastic history of "
+             "peri/ves and peri/eps by a whole time step), and this rule evaluates the forces "
+             "more than once per step. Use quadrature lobatto 2 (one evaluation per step, at "
+             "its end) or fix nve",
+             style, rule, force->pair_style);
+}
+
 /* ---------------------------------------------------------------------- */
 
 int ForceSampler::present() const

@@ -54,6 +54,9 @@ namespace PEJump {
     // parasitic mode of the jumps unless the rule has only end nodes
     // (velocity Verlet for such forces): refused with the rule's name then
     void refuse_velocity_forces(const char *style, const std::string &rule, bool end_nodes) const;
+    // an error for force styles with per-bond state that every evaluation
+    // advances (peridynamics) unless the rule evaluates only at step ends
+    void refuse_stateful_forces(const char *style, const std::string &rule, bool end_nodes) const;
 
     // forward-communicate positions, clear forces, run the pre_force stage
     // of the other fixes, compute the contributions in mask with the given

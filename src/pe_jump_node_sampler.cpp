@@ -245,8 +245,8 @@ bool NodeSampler::forces_dumped() const
    the step and at the step end, at_step_end()): the computes of the TALLY
    package add up the pair tallies of every evaluation in a step (they
    would count pairs twice), and bonds that break inside their evaluation
-   (bond styles with partial_flag, peridynamic partner lists) would break
-   where output looks (the trajectory would depend on the output)
+   (bond styles with partial_flag) would break where output looks (the
+   trajectory would depend on the output)
 ------------------------------------------------------------------------- */
 
 void NodeSampler::refuse_step_end_side_effects(const char *style, const std::string &why) const
@@ -259,16 +259,13 @@ void NodeSampler::refuse_step_end_side_effects(const char *style, const std::str
                  "in a step, and {}, so it would count pairs twice. Use compute pair, pe/atom, "
                  "stress/atom or group/group instead{}",
                  style, compute->id, compute->style, why, other);
-  const bool breaks = (force->bond && force->bond->partial_flag) || atom->peri_flag;
-  if (breaks)
+  // (peridynamic bonds are refused before, ForceSampler::refuse_stateful_forces)
+  if (force->bond && force->bond->partial_flag)
     error->all(FLERR,
-               "Fix {}: {} break bonds inside the force evaluation, and {}, so output would "
-               "break bonds that a run without output keeps. Use quadrature lobatto 2 or 3",
-               style,
-               atom->peri_flag
-                   ? fmt::format("the peridynamic interactions of pair style {}", force->pair_style)
-                   : fmt::format("the bonds of bond style {}", force->bond_style),
-               why);
+               "Fix {}: the bonds of bond style {} break inside the force evaluation, and {}, so "
+               "output would break bonds that a run without output keeps. Use quadrature "
+               "lobatto 2 or 3",
+               style, force->bond_style, why);
 }
 
 /* ---------------------------------------------------------------------- */
