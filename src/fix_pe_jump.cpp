@@ -173,19 +173,7 @@ void FixPEJump::init()
   // with neigh_modify include LAMMPS clears and checks the include group
   // only; pe_jump/async handles the atoms outside it
   PEJump::FirstGroup(lmp).require_all(groupbit, style);
-  if (steps->adapts())
-    for (const auto &ifix : modify->get_fix_list()) {
-      if (utils::strmatch(ifix->style, "^dt/reset"))
-        error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them",
-                   style, ifix->id, ifix->style);
-      // (fix nve with fix dt/reset has the same problem in LAMMPS)
-      if (utils::strmatch(ifix->style, "^deform"))
-        error->all(FLERR,
-                   "Fix {} adapt changes the time step, but fix {} ({}) changes the box by the "
-                   "step count, as if the step were constant: the box would run ahead of or "
-                   "behind the time. Use a fixed time step with fix deform",
-                   style, ifix->id, ifix->style);
-    }
+  if (steps->adapts()) refuse_step_counters();
 
   others->sort(*sampler);
   sampler->refuse_velocity_forces(style, rule->name(), rule->only_end_nodes());
@@ -213,21 +201,52 @@ void FixPEJump::init()
   // Verlet, whose jumps [v]^n = h a^n have no such mode: auto leaves it be
   damping->init(opts.damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
                 others->thermostat_forces() > 0);
+  check_others_for_rule();
+  if (automatic) automatic->check_compute(style);
+  if (present && !(opts.sample_mask & present) && (comm->me == 0))
+    error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
+}
+
+/* ----------------------------------------------------------------------
+   adapt changes the time step: other fixes that set it, or that count
+   steps as if it were constant, are refused
+------------------------------------------------------------------------- */
+
+void FixPEJump::refuse_step_counters() const
+{
+  for (const auto &ifix : modify->get_fix_list()) {
+    if (utils::strmatch(ifix->style, "^dt/reset"))
+      error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them",
+                 style, ifix->id, ifix->style);
+    // (fix nve with fix dt/reset has the same problem in LAMMPS)
+    if (utils::strmatch(ifix->style, "^deform"))
+      error->all(FLERR,
+                 "Fix {} adapt changes the time step, but fix {} ({}) changes the box by the "
+                 "step count, as if the step were constant: the box would run ahead of or "
+                 "behind the time. Use a fixed time step with fix deform",
+                 style, ifix->id, ifix->style);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   other fixes and computes against the rule: where it samples the forces
+   (inside the step or at its end) and how often
+------------------------------------------------------------------------- */
+
+void FixPEJump::check_others_for_rule() const
+{
+  const bool primary_at_end = (rule->node[rule->primary()] == 1.0);
   others->refuse_shared_atoms();
-  others->refuse_for_rule(rule->name(), rule->node[rule->primary()] == 1.0, rule->only_end_nodes());
-  others->warn_step_number(rule->name(), rule->node[rule->primary()] == 1.0,
-                           rule->only_end_nodes());
-  others->warn_energy_inside_step(rule->name(), rule->node[rule->primary()] == 1.0);
-  if (rule->node[rule->primary()] != 1.0)
+  others->refuse_for_rule(rule->name(), primary_at_end, rule->only_end_nodes());
+  others->warn_step_number(rule->name(), primary_at_end, rule->only_end_nodes());
+  others->warn_energy_inside_step(rule->name(), primary_at_end);
+  if (!primary_at_end)
     nodes->refuse_step_end_side_effects(
         style,
         fmt::format("with quadrature {} this fix evaluates the force field at the "
                     "primary node inside the step and again at the step end on steps "
                     "that tally energy or virial or dump forces",
                     rule->name()));
-  if (automatic) automatic->check_compute(style);
-  if (present && !(opts.sample_mask & present) && (comm->me == 0))
-    error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
 
 /* ----------------------------------------------------------------------

@@ -139,6 +139,8 @@ class FixPEJump : public Fix {
   void finish_check(const double *local);
   std::string instability_advice() const;
   void tally_at_node();
+  void refuse_step_counters() const;
+  void check_others_for_rule() const;
   void note_damping(bool from_now) const;
   double potential_now();
   void global_state(double *) const;
