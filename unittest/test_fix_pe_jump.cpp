@@ -41,6 +41,35 @@ std::string error_from(const std::function<void()> &run)
   return "no error";
 }
 
+// LAMMPS' peri example, shortened: a sphere moving down at speed indents a
+// cylinder at rest (SI units); the kinetic energy after the run
+double peri_indentation(const std::string &pair, const std::string &coeff, const std::string &fix,
+                        double speed, double dt, int steps)
+{
+  Sim s;
+  s.cmds({"units si",
+          "boundary s s s",
+          "atom_style peri",
+          "atom_modify map array",
+          "neighbor 0.0010 bin",
+          "lattice sc 0.0005",
+          "region target cylinder y 0.0 0.0 0.0030 -0.0030 0.0 units box",
+          "create_box 1 target",
+          "create_atoms 1 region target",
+          "pair_style " + pair,
+          "pair_coeff * * " + coeff,
+          "set group all density 2200",
+          "set group all volume 1.25e-10",
+          "velocity all set 0.0 0.0 0.0 sum no units box",
+          "fix 1 all " + fix,
+          fmt::format("variable y equal 0.00155-{}*time", speed),
+          "fix 2 all indent 1e17 sphere 0.0 v_y 0.0 0.0015 units box",
+          fmt::format("timestep {}", dt),
+          "thermo 0",
+          fmt::format("run {} post no", steps)});
+  return s.eval("ke");
+}
+
 constexpr double OMEGA = 50.0;
 
 // pseudo-energy H~ = pe + f_ID and discrete energy H = pe + ke after a run
@@ -438,28 +467,8 @@ TEST(PEJump, InstabilityDetectedJustAboveCflLimit)
 TEST(PEJump, LoadFromRestIsNoInstability)
 {
   const auto indentation = [](const std::string &fix) {
-    Sim s;
-    s.cmds({"units si",
-            "boundary s s s",
-            "atom_style peri",
-            "atom_modify map array",
-            "neighbor 0.0010 bin",
-            "lattice sc 0.0005",
-            "region target cylinder y 0.0 0.0 0.0030 -0.0030 0.0 units box",
-            "create_box 1 target",
-            "create_atoms 1 region target",
-            "pair_style peri/pmb",
-            "pair_coeff * * 1.6863e22 0.0015001 0.0005 0.25",
-            "set group all density 2200",
-            "set group all volume 1.25e-10",
-            "velocity all set 0.0 0.0 0.0 sum no units box",
-            "fix 1 all " + fix,
-            "variable y equal 0.00155-200*time",
-            "fix 2 all indent 1e17 sphere 0.0 v_y 0.0 0.0015 units box",
-            "timestep 1.25e-8",
-            "thermo 0",
-            "run 1300 post no"});
-    return s.eval("ke");
+    return peri_indentation("peri/pmb", "1.6863e22 0.0015001 0.0005 0.25", fix, 200.0, 1.25e-8,
+                            1300);
   };
   const double nve = indentation("nve");
   EXPECT_NEAR(indentation("pe_jump quadrature lobatto 2"), nve, 1e-9 * nve);
@@ -468,13 +477,10 @@ TEST(PEJump, LoadFromRestIsNoInstability)
   harmonic_ring(s, 10, 50.0, 0.0, 3);
   s.cmds({"fix 1 all pe_jump", "variable push equal (time>1.0)*0.1", "group one id 1",
           "fix 2 one addforce v_push 0.0 0.0", "timestep 0.102", "thermo 0"});
-  std::string msg = "no error";
-  try {
-    s.cmd("run 20000 post no");
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    msg = e.what();
-  }
-  EXPECT_THAT(msg, ContainsRegex("Fix pe_jump is unstable at step [0-9]+"));
+  EXPECT_THAT(error_from([&]() {
+                s.cmd("run 20000 post no");
+              }),
+              ContainsRegex("Fix pe_jump is unstable at step [0-9]+"));
 }
 
 /* ----------------------------------------------------------------------
@@ -1245,28 +1251,8 @@ TEST(PEJump, BreakableBondsDoNotDependOnTheOutput)
 TEST(PEJump, PeridynamicsTakesOneEvaluationPerStep)
 {
   const auto cylinder = [](const std::string &fix) {
-    Sim s;
-    s.cmds({"units si",
-            "boundary s s s",
-            "atom_style peri",
-            "atom_modify map array",
-            "neighbor 0.0010 bin",
-            "lattice sc 0.0005",
-            "region target cylinder y 0.0 0.0 0.0030 -0.0030 0.0 units box",
-            "create_box 1 target",
-            "create_atoms 1 region target",
-            "pair_style peri/ves",
-            "pair_coeff * * 14.9e9 14.9e9 0.0015001 0.0005 0.25 0.5 0.001",
-            "set group all density 2200",
-            "set group all volume 1.25e-10",
-            "velocity all set 0.0 0.0 0.0 sum no units box",
-            "fix 1 all " + fix,
-            "variable y equal 0.00155-100*time",
-            "fix 2 all indent 1e17 sphere 0.0 v_y 0.0 0.0015 units box",
-            "timestep 1e-7",
-            "thermo 0",
-            "run 150 post no"});
-    return s.eval("ke");
+    return peri_indentation("peri/ves", "14.9e9 14.9e9 0.0015001 0.0005 0.25 0.5 0.001", fix, 100.0,
+                            1e-7, 150);
   };
   const double nve = cylinder("nve");
   EXPECT_NEAR(cylinder("pe_jump quadrature lobatto 2"), nve, 1e-9 * nve);
