@@ -99,8 +99,8 @@ void ForceSampler::refuse_stateful_forces(const char *style, const std::string &
              "Fix {} with quadrature {}: pair style {} advances the state of its bonds at every "
              "force evaluation (broken bonds, and the viscoelastic or plastic history of "
              "peri/ves and peri/eps by a whole time step), and this rule evaluates the forces "
-             "more than once per step. Use quadrature lobatto 2 (one evaluation per step, at "
-             "its end) or fix nve",
+             "inside the step or more than once per step. Use quadrature lobatto 2 (one "
+             "evaluation per step, at its end) or fix nve",
              style, rule, force->pair_style);
 }
 

@@ -101,14 +101,20 @@ double StepControl::mass_of(int i) const
 void StepControl::start_run(const char *style, double pseudo_energy)
 {
   if (!adapts()) return;
-  const double dt = MIN(MAX(update->dt, dtmin), dtmax);
-  if (dt != update->dt) {
-    if (comm->me == 0)
-      utils::logmesg(lmp, "Fix {}: timestep {} is outside the adapt range [{}, {}]: using {}\n",
-                     style, update->dt, dtmin, dtmax, dt);
-    set_timestep(dt);
-  }
+  bring_into_range(style);
   energy_scale = fabs(pseudo_energy);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StepControl::bring_into_range(const char *style)
+{
+  const double dt = MIN(MAX(update->dt, dtmin), dtmax);
+  if (dt == update->dt) return;
+  if (comm->me == 0)
+    utils::logmesg(lmp, "Fix {}: timestep {} is outside the adapt range [{}, {}]: using {}\n",
+                   style, update->dt, dtmin, dtmax, dt);
+  set_timestep(dt);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -130,14 +136,12 @@ void StepControl::first_step(const char *style, const AtomSet &set, double **f, 
   const double kinetic = 0.5 * force->mvv2e * sum[1];
   const double scale = MAX(fabs(pe + kinetic), kinetic);
   const double target = 8.0 * ADAPT_SAFETY * eps * scale / force->mvv2e;
-  const double range = MIN(MAX(update->dt, dtmin), dtmax);
-  double dt = range;
-  if ((sum[0] > 0.0) && (dt * dt * sum[0] > target)) dt = MAX(sqrt(target / sum[0]), dtmin);
-  if (dt == update->dt) return;
-  if ((comm->me == 0) && (range != update->dt))
-    utils::logmesg(lmp, "Fix {}: timestep {} is outside the adapt range [{}, {}]: using {}\n",
-                   style, update->dt, dtmin, dtmax, range);
-  if ((comm->me == 0) && (dt != range))
+  bring_into_range(style);
+  const double range = update->dt;
+  if (!(sum[0] > 0.0) || (range * range * sum[0] <= target)) return;
+  const double dt = MAX(sqrt(target / sum[0]), dtmin);
+  if (dt == range) return;
+  if (comm->me == 0)
     utils::logmesg(lmp,
                    "Fix {}: the first step takes {:.8g} instead of {:.8g}, so that the jump "
                    "energy of the initial kick stays within the adapt bound\n",

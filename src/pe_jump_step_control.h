@@ -112,6 +112,7 @@ namespace PEJump {
     int hist1, hist2;        // state fields: averaged forces of the last two steps
     double hlast, hlast2;    // sizes of the last two steps, 0 if there are none
     double mass_of(int i) const;
+    void bring_into_range(const char *style);    // the time step into [dtmin, dtmax]
     static double largest_step(const double *sum, double target, double hcap, double hlow);
   };
 
