@@ -268,7 +268,8 @@ void FixPEJump::setup(int /*vflag*/)
 {
   state->ensure(atom->nlocal);
   grow_work();
-  guard->start_run();
+  guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
+                   !domain->box_change);
   opened_ahead = 0;
   evals_step = 0.0;
   // a new time step between runs: the jumps fit the old one (restart), unless
@@ -602,9 +603,10 @@ void FixPEJump::final_integrate()
 /* ----------------------------------------------------------------------
    the owned atoms of the group (those listed in only, if given) jump with
    the quadrature sums favg of their forces over the step h_step and move on
-   by rest from the primary node to q^{n+1}; the start-node forces of the
-   next step and the force history are kept. mag[0], mag[1]: the largest
-   |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for the stability guard
+   by rest from the primary node to q^{n+1} (quadrature_sum() kept the
+   start-node forces of the next step); the force history is kept.
+   mag[0], mag[1]: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far, for
+   the stability guard
 ------------------------------------------------------------------------- */
 
 void FixPEJump::finish_step(double **favg, double rest, double *mag)
@@ -614,7 +616,6 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
   double **f = atom->f;
   double **jump = scheme->jump();
   const bool keep_start = rule->has_end_nodes();
-  double **fstart = scheme->fstart();
   double **fhist = steps->next_history();
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS);
   double *vsig = fingerprint ? scheme->vsig() : nullptr;
@@ -628,8 +629,7 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
   const double beta = damping->beta(h_step);
   if (!centre_kick && !end_kick && (beta == 0.0) && !fhist) {
-    scheme->jump_loop(group_atoms(), favg,
-                      {h_step, rest, -1.0, keep_start ? fsample() : nullptr, fingerprint}, mag);
+    scheme->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, nullptr, fingerprint}, mag);
     return;
   }
   double vv = mag[0], jj = mag[1];
@@ -649,7 +649,6 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
           PEJump::TwoStep::jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
       v[i][k] = vh[k];
       jump[i][k] = jmp[k];
-      if (keep_start) fstart[i][k] = sampled[i][k];
       if (fhist) fhist[i][k] = favg[i][k];
     }
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
@@ -843,8 +842,11 @@ void FixPEJump::quadrature_sum()
   const int reuse_start = rule->has_end_nodes();
   double **fstart = scheme->fstart();
 
-  if (split_primary() || reuse_start) primary_sampled_force();
+  if (split_primary()) primary_sampled_force();
 
+  // a Lobatto rule's primary node is the end node: its sampled forces are
+  // the start node of the next step, kept in fstart once the sum has read
+  // this step's start node
   double **fp = split_primary() ? fsample() : atom->f;
   double **sum = fsum();
   const double w0 = rule->weight[0];
@@ -853,7 +855,10 @@ void FixPEJump::quadrature_sum()
       for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
     for (int k = 0; k < 3; k++) {
       sum[i][k] = wp * fp[i][k];
-      if (reuse_start) sum[i][k] += w0 * fstart[i][k];
+      if (reuse_start) {
+        sum[i][k] += w0 * fstart[i][k];
+        fstart[i][k] = fp[i][k];
+      }
     }
   });
 
@@ -861,14 +866,14 @@ void FixPEJump::quadrature_sum()
   if (rule->size() - first <= 1) return;
   // with a Lobatto rule the total force at the primary node (the step end)
   // is needed afterwards only for the impulses of forces outside the rule,
-  // or if something looks at it (it is then fsample() again)
+  // or if something looks at it (it is then fstart again)
   const bool keep_forces = split_primary() || !reuse_start;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
                        group_atoms(), opts.sample_mask, fsum(), nullptr, keep_forces);
   evals_step += evaluated * sampler->fraction(opts.sample_mask);
   if (!keep_forces && atom->nlocal && (others->step_observed() || nodes->tally_step()))
-    memcpy(&atom->f[0][0], &fsample()[0][0], 3 * sizeof(double) * atom->nlocal);
+    memcpy(&atom->f[0][0], &fstart[0][0], 3 * sizeof(double) * atom->nlocal);
 }
 
 /* ----------------------------------------------------------------------
@@ -888,6 +893,10 @@ void FixPEJump::auto_quadrature_sum()
   const int evaluated = automatic->sum(*nodes, opts.sample_mask, group_atoms(), free_flight(),
                                        h_step, fstart, fsample(), fsum());
   evals_step += evaluated * sampler->fraction(opts.sample_mask);
+  // the end node is the start node of the next step
+  for_atoms([&](int i) {
+    for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
+  });
 }
 
 /* ----------------------------------------------------------------------
@@ -911,12 +920,16 @@ void FixPEJump::check_excursion(double lo, double hi)
   }
 
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  guard->step(h_step);
   if (guard->has_stats()) {
     local[1] = h_step * h_step * guard->speed2();
     local[2] = h_step * h_step * guard->jump2();
     local[3] = guard->jump2();
     local[4] = guard->speed2();
-    if (xhold) local[0] = guard->excursion(group_atoms(), free_flight(), xhold, lo, hi);
+    if (xhold)
+      local[0] = guard->excursion_since(group_atoms(), free_flight(), xhold, lo, hi);
+    else
+      guard->forget_reach();
   } else {
     const StabilityGuard::Nodes at{h_step, lo, hi, cp, nullptr, 0.0, 0.0, 0.0, nullptr};
     guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);

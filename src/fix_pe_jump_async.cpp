@@ -448,7 +448,8 @@ void FixPEJumpAsync::advance(double t)
       for (int k = 0; k < 3; k++) x[i][k] += t * vhalf(i, k);
   // with neigh_modify include, LAMMPS checks the distances of the atoms of
   // the include group only
-  if (first->moved_too_far(groupbit, false)) next_reneighbor = update->ntimestep;
+  if (first->moved_too_far(groupbit, false, guard->all_within()))
+    next_reneighbor = update->ntimestep;
 }
 
 /* ----------------------------------------------------------------------
@@ -464,7 +465,10 @@ void FixPEJumpAsync::all_to_primary_node(double t)
   const int first_node = rule->has_end_nodes() ? 1 : 0;
   const double c_lo = rule->node[first_node];
   const double elapsed = clocks->start(), span = elapsed + h_step;
-  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+  guard->step(h_step);
+  // (none of the atoms can be beyond half the skin: no distances to measure)
+  const bool within = guard->all_within();
+  double **xhold = (neighbor->dist_check && !within) ? neighbor->get_xhold() : nullptr;
   const StabilityGuard::Nodes at{h_step,
                                  c_lo * h_step,
                                  (nodes->step_end_evaluated() ? 1.0 : rule->node.back()) * h_step,
@@ -482,6 +486,7 @@ void FixPEJumpAsync::all_to_primary_node(double t)
   double *tpos = clocks->times();
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
   clocks->moving_at(t);
+  guard->forget_reach();    // the next coarse step moves other atoms
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     const double v[3] = {vhalf(i, 0), vhalf(i, 1), vhalf(i, 2)};
@@ -492,8 +497,9 @@ void FixPEJumpAsync::all_to_primary_node(double t)
     for (int k = 0; k < 3; k++) x[i][k] += dt * v[k];
     tpos[i] = AsyncClocks::MOVING;
   }
+  if (!within) guard->all_measured(local[0], MAX(span, at.hsel), clocks->steps());
   finish_check(local);
-  if (first->moved_too_far(groupbit, true)) next_reneighbor = update->ntimestep;
+  if (first->moved_too_far(groupbit, true, within)) next_reneighbor = update->ntimestep;
 }
 
 /* ----------------------------------------------------------------------
@@ -531,7 +537,8 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   check_clocks();
 
   grow_work();
-  guard->start_run();
+  guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
+                   !domain->box_change);
   evals_step = 0.0;
   if (!scheme->started)
     start_scheme(nullptr, true);
@@ -1103,6 +1110,7 @@ void FixPEJumpAsync::check_lists()
   const double from = opened_ahead ? rule->node[rule->primary()] : 0.0;
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  guard->step(h_step);
   if (guard->has_stats()) {
     // the magnitudes were taken per clock by final_integrate(); the fine
     // nodes' excursions matter only for the atoms that move to them, and
@@ -1121,7 +1129,10 @@ void FixPEJumpAsync::check_lists()
     const double lo = (c_lo - from) * h_step, hi = (c_hi - from) * h_step;
     if (xhold && (tally || unchecked || (rule->size() > 1)) &&
         !guard->ends_checked(*rule, lo, hi, h_step))
-      local[0] = guard->excursion(group_atoms(&assign->moving_atoms), free_flight(), xhold, lo, hi);
+      local[0] =
+          guard->excursion_since(group_atoms(&assign->moving_atoms), free_flight(), xhold, lo, hi);
+    else
+      guard->forget_reach();
   } else {
     const double cp = rule->node[rule->primary()] * h_step;
     const StabilityGuard::Nodes at{

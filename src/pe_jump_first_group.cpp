@@ -200,7 +200,7 @@ void FirstGroup::clear_stale_forces()
 
 /* ---------------------------------------------------------------------- */
 
-bool FirstGroup::moved_too_far(int groupbit, bool every_atom_moved)
+bool FirstGroup::moved_too_far(int groupbit, bool every_atom_moved, bool within)
 {
   if (!active()) return false;
   if (every_atom_moved) held_moved = true;
@@ -212,7 +212,7 @@ bool FirstGroup::moved_too_far(int groupbit, bool every_atom_moved)
   const bool all = held_moved;
   // at a coarse node the held atoms move on to the node at the step's end
   held_moved = every_atom_moved;
-  const int local = beyond(all ? nullptr : &movers, groupbit);
+  const int local = within ? 0 : beyond(all ? nullptr : &movers, groupbit);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   return global != 0;

@@ -87,8 +87,9 @@ namespace PEJump {
     // fix group if every_atom_moved): true on every rank if LAMMPS' distance
     // check would ask for a rebuild for an atom after nfirst, or if their
     // positions at the last build are unknown (collective on the steps where
-    // LAMMPS checks)
-    bool moved_too_far(int groupbit, bool every_atom_moved);
+    // LAMMPS checks); within: the rank's atoms are known to be within half
+    // the skin (StabilityGuard::all_within())
+    bool moved_too_far(int groupbit, bool every_atom_moved, bool within);
 
    private:
     bool stale_all;                // forces of all atoms after nfirst are stale

@@ -14,6 +14,7 @@
 #include "pe_jump_stability_guard.h"
 
 #include "atom.h"
+#include "domain.h"
 #include "error.h"
 #include "fix.h"
 #include "modify.h"
@@ -22,6 +23,7 @@
 #include "pe_jump_quadrature.h"
 #include "update.h"
 
+#include <cfloat>
 #include <cmath>
 
 using namespace LAMMPS_NS;
@@ -33,19 +35,28 @@ static constexpr double HINT_GROWTH = 2.0;      // ... that is instability if at
 // kinetic energy grew with the motion (from a start at rest), not by
 // instability: they become the reference
 static constexpr double MOTION_SHARE = 1.0e-3;
+// margins of the bounds on the excursion (ReachBound): relative, on the
+// largest speed and on half the skin, and on each update of a coordinate
+static constexpr double SPEED_MARGIN = 1.0e-9;
+static constexpr double REACH_MARGIN = 1.0e-9;
+static constexpr double POSITION_ROUNDING = DBL_EPSILON;
 
 /* ---------------------------------------------------------------------- */
 
 StabilityGuard::StabilityGuard(LAMMPS *lmp) :
-    Pointers(lmp), stats{0.0, 0.0}, slow{0.0, 0.0}, valid(false), jump_ref(0.0), last_growth(0.0)
+    Pointers(lmp), stats{0.0, 0.0}, slow{0.0, 0.0}, valid(false), jump_ref(0.0), last_growth(0.0),
+    trusted(false)
 {
 }
 
 /* ---------------------------------------------------------------------- */
 
-void StabilityGuard::start_run()
+void StabilityGuard::start_run(bool free_flight_only)
 {
+  trusted = free_flight_only;
   valid = false;
+  reach.forget();
+  all.forget();
   jump_ref = 0.0;
 }
 
@@ -124,6 +135,81 @@ double StabilityGuard::excursion(const AtomSet &set, const FreeFlight &vel, doub
   };
   set.each(atom->mask, atom->nlocal, one);
   return worst;
+}
+
+/* ----------------------------------------------------------------------
+   the farthest an atom moves in time t at speeds up to sqrt(speed2), with
+   margins for rounding: of the speeds, and of the positions at each of at
+   most moves updates (half an ulp of the largest coordinate, which is
+   within the box bounds and a skin)
+------------------------------------------------------------------------- */
+
+double StabilityGuard::travel(double t, double speed2, int moves) const
+{
+  double extent = 0.0;
+  for (int k = 0; k < 3; k++)
+    extent = MAX(extent, MAX(fabs(domain->boxlo_bound[k]), fabs(domain->boxhi_bound[k])));
+  extent += neighbor->skin;
+  return t * sqrt(speed2) * (1.0 + SPEED_MARGIN) + moves * POSITION_ROUNDING * extent;
+}
+
+/* ----------------------------------------------------------------------
+   the distance below which the verdict of a measure is known (half the
+   skin, with a margin for the rounding of the measure)
+------------------------------------------------------------------------- */
+
+double StabilityGuard::clear() const
+{
+  return (1.0 - REACH_MARGIN) * 0.5 * neighbor->skin;
+}
+
+/* ----------------------------------------------------------------------
+   a step moves the atoms at most three times: to the primary node, on to
+   the end, and ahead into the next step
+------------------------------------------------------------------------- */
+
+void StabilityGuard::step(double h)
+{
+  const double moved = travel(h, MAX(stats[0], slow[0]), 3);
+  reach.moved(moved);
+  all.moved(moved);
+}
+
+/* ----------------------------------------------------------------------
+   after a measure the bound covers the rest of the step (at most h)
+------------------------------------------------------------------------- */
+
+double StabilityGuard::excursion_since(const AtomSet &set, const FreeFlight &vel, double **xhold,
+                                       double lo, double hi)
+{
+  if (free_flight_only() && (reach.within(clear(), neighbor->ncalls) || all_within())) return 0.0;
+  const double worst = excursion(set, vel, xhold, lo, hi);
+  if (free_flight_only())
+    reach.measured(sqrt(worst) + travel(update->dt, MAX(stats[0], slow[0]), 3), neighbor->ncalls);
+  else
+    reach.forget();
+  return worst;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool StabilityGuard::all_within() const
+{
+  return free_flight_only() && all.within(clear(), neighbor->ncalls);
+}
+
+/* ----------------------------------------------------------------------
+   the slow atoms' nodes measured lie inside the coarse step, its fine
+   atoms' inside its last fine step: the bound covers the coarse step
+------------------------------------------------------------------------- */
+
+void StabilityGuard::all_measured(double worst, double coarse_step, int fine_steps)
+{
+  if (free_flight_only())
+    all.measured(sqrt(worst) + travel(coarse_step, MAX(stats[0], slow[0]), 3 * fine_steps),
+                 neighbor->ncalls);
+  else
+    all.forget();
 }
 
 /* ---------------------------------------------------------------------- */

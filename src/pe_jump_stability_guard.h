@@ -15,6 +15,7 @@
 #define LMP_PE_JUMP_STABILITY_GUARD_H
 
 #include "pe_jump_node_sampler.h"
+#include "pe_jump_reach_bound.h"
 
 #include <cmath>
 #include <functional>
@@ -39,10 +40,17 @@ namespace PEJump {
 
     explicit StabilityGuard(class LAMMPS *);
 
-    void start_run();
+    // free_flight_only: nothing but the fix moves the atoms or changes
+    // their velocities (other fixes, a changing box), see excursion_since()
+    void start_run(bool free_flight_only);
     // the largest |v^{n+1/2}|^2 and |[v]|^2 after a step (speeds of the next)
     void set_stats(double vv, double jj);
-    void forget_stats() { valid = false; }
+    void forget_stats()
+    {
+      valid = false;
+      reach.forget();
+      all.forget();
+    }
     bool has_stats() const { return valid; }
     double speed2() const { return stats[0]; }
     double jump2() const { return stats[1]; }
@@ -113,6 +121,24 @@ namespace PEJump {
     // largest excursion^2 of the nodes x + t v, t = lo and hi, from xhold
     double excursion(const AtomSet &, const FreeFlight &, double **xhold, double lo,
                      double hi) const;
+    // Bounds on how far atoms are from their build positions (ReachBound),
+    // kept where the fix alone moves the atoms and sets their velocities
+    // (start_run()); a list build, forgotten stats or a new run measure
+    // again. step(h) as every step begins, before its measures: the atoms
+    // move by at most h times the largest speed of the stats in it.
+    void step(double h);
+    // excursion() of a set that is measured at every step (forget_reach()
+    // where a step measures nothing), or 0 where its nodes cannot be beyond
+    // half the skin: the verdict is that of excursion()
+    double excursion_since(const AtomSet &, const FreeFlight &, double **xhold, double lo,
+                           double hi);
+    void forget_reach() { reach.forget(); }
+    // pe_jump/async: true if no atom of the group can be beyond half the
+    // skin now or at a node up to the end of this step, from the largest
+    // excursion^2 of all of them at the last coarse node (all_measured(),
+    // with the coarse step and its number of fine steps)
+    bool all_within() const;
+    void all_measured(double worst, double coarse_step, int fine_steps);
 
     enum Verdict { FINE, REBUILD, UNSTABLE, TOO_FAR };
     Verdict judge(const double *global);    // the reduced measures
@@ -132,6 +158,13 @@ namespace PEJump {
     bool valid;
     double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
     double last_growth;
+    bool trusted;        // only the fix moves the atoms, with the speeds of the stats
+    ReachBound reach;    // of the nodes of the atoms measured by excursion_since()
+    ReachBound all;      // of all atoms, measured at coarse nodes
+
+    bool free_flight_only() const { return trusted && valid; }
+    double travel(double t, double speed2, int moves) const;
+    double clear() const;
   };
 
 }    // namespace PEJump

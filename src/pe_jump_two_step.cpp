@@ -217,6 +217,8 @@ void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, 
   const int *type = atom->type;
   const double kick = 2.0 * step.h * force->ftm2v;
   const double rest = step.rest, dt_ahead = step.ahead;
+  // (a Lobatto rule's primary node is the step end: nothing to move then)
+  const bool moves = (rest != 0.0) || (AHEAD && ahead);
   double vv = mag[0], jj = mag[1];
   set.each(atom->mask, atom->nlocal, [&](int i) {
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
@@ -234,7 +236,7 @@ void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, 
       }
     }
     for (int k = 0; k < 3; k++) {
-      xi[k] = xn[k];
+      if (moves) xi[k] = xn[k];
       vi[k] = vh[k];
       ji[k] = jmp[k];
     }

@@ -1,22 +1,28 @@
 // unit tests of parts of the fixes that need a LAMMPS instance but no run:
 // the per-atom state table (values kept through growth, copies, exchange
-// and restart packing, new atoms at their init values, memory count), and
-// which other fixes the integrators watch for velocity changes
+// and restart packing, new atoms at their init values, memory count), the
+// other fixes that the integrators watch for velocity changes, and the
+// stability guard's bound on how far atoms moved since the list build
 
+#include "neighbor.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
+#include "pe_jump_node_sampler.h"
 #include "pe_jump_other_fixes.h"
+#include "pe_jump_stability_guard.h"
 #include "pe_jump_systems.h"
 
 #include "gtest/gtest.h"
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 using namespace PEJumpTest;
 using LAMMPS_NS::PEJump::AtomState;
 using LAMMPS_NS::PEJump::ForceSampler;
 using LAMMPS_NS::PEJump::OtherFixes;
+using LAMMPS_NS::PEJump::StabilityGuard;
 
 TEST(AtomState, KeepsValuesThroughGrowthCopyAndPacking)
 {
@@ -101,5 +107,102 @@ TEST(OtherFixes, FixesThatOnlyReadAreNotWatched)
     others.sort(sampler);
     EXPECT_TRUE(others.may_change_velocities(OtherFixes::BETWEEN_STEPS)) << changer;
     s.cmd(std::string("unfix ") + (changer[4] == 'm' ? "mom" : "scale"));
+  }
+}
+
+// the guard skips the measure of how far the nodes are from the positions
+// of the last list build where the atoms cannot have come near half the
+// skin (each step moves them by at most h times the largest speed): its
+// verdict (beyond half the skin or not) is always that of the measure, for
+// the set measured every step and for all atoms measured every K steps
+// (pe_jump/async's coarse nodes). Atoms move with random speeds up to the
+// largest, one of them straight at it (where the bounds are tight), until
+// they pass half the skin; a list build, forgotten speeds and a new run
+// measure again.
+TEST(StabilityGuard, ExcursionSinceGivesTheVerdictOfTheMeasure)
+{
+  Sim s;
+  lj_liquid(s, 3);
+  s.cmds({"neighbor 0.3 bin", "run 0 post no"});
+  auto *atom = s.lmp->atom;
+  double **xhold = s.lmp->neighbor->get_xhold();
+  const int n = atom->nlocal, K = 5;
+  const double limit = 0.15 * 0.15, h = s.lmp->update->dt, speed = 1.0;
+  std::vector<double> vbuf(3 * n), jbuf(3 * n, 0.0);
+  std::vector<double *> vrow(n), jrow(n);
+  for (int i = 0; i < n; ++i) {
+    vrow[i] = &vbuf[3 * i];
+    jrow[i] = &jbuf[3 * i];
+  }
+  const LAMMPS_NS::PEJump::FreeFlight flight{vrow.data(), jrow.data(), nullptr, false};
+  const LAMMPS_NS::PEJump::AtomSet all{1, nullptr};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+
+  StabilityGuard guard(s.lmp);
+  guard.start_run(true);
+  int early = 0;    // measures in the first 20 steps, far from the limit
+  bool passed = false, skipped_all = false;
+  for (int round = 0; round < 3; ++round) {
+    // new directions each round; atom 0 flies straight at the largest speed
+    for (int i = 0; i < n; ++i) {
+      double norm = 0.0;
+      for (int k = 0; k < 3; ++k) norm += (vrow[i][k] = uni(rng)) * vrow[i][k];
+      const double scale = (i == 0) ? speed / sqrt(norm) : 0.5 * speed * fabs(uni(rng));
+      for (int k = 0; k < 3; ++k) vrow[i][k] *= scale;
+    }
+    guard.set_stats(speed * speed, 0.0);
+    for (int step = 0; step < 40; ++step) {
+      guard.step(h);
+      const double since = guard.excursion_since(all, flight, xhold, 0.0, h);
+      const double exact = guard.excursion(all, flight, xhold, 0.0, h);
+      EXPECT_EQ(since > limit, exact > limit) << "round " << round << " step " << step;
+      if (since != 0.0) {
+        if ((round == 0) && (step < 20)) ++early;
+        EXPECT_EQ(since, exact);
+      }
+      if (guard.all_within()) {
+        EXPECT_LE(exact, limit) << "round " << round << " step " << step;
+        skipped_all = true;
+      } else if (step % K == K - 1) {
+        // as the slow atoms' coarse nodes: up to a coarse step back
+        const double back = -(K - 1) * h;
+        guard.all_measured(guard.excursion(all, flight, xhold, back, back), K * h, K);
+      }
+      passed = passed || (exact > limit);
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) atom->x[i][k] += h * vrow[i][k];
+    }
+  }
+  // the straight flier passed half the skin (0.15 in 30 steps of 0.005);
+  // far from it only the first step was measured
+  EXPECT_TRUE(passed);
+  EXPECT_TRUE(skipped_all);
+  EXPECT_EQ(early, 1);
+
+  // a list build measures again (the positions there are the new reference)
+  s.lmp->neighbor->build(1);
+  xhold = s.lmp->neighbor->get_xhold();
+  guard.set_stats(speed * speed, 0.0);
+  guard.step(h);
+  EXPECT_GT(guard.excursion_since(all, flight, xhold, 0.0, h), 0.0);
+  EXPECT_FALSE(guard.all_within());
+  guard.step(h);
+  EXPECT_EQ(guard.excursion_since(all, flight, xhold, 0.0, h), 0.0);
+  guard.all_measured(guard.excursion(all, flight, xhold, 0.0, h), K * h, K);
+  EXPECT_TRUE(guard.all_within());
+  // forgotten speeds measure again, as does a new run and an untrusted one
+  guard.forget_stats();
+  guard.set_stats(speed * speed, 0.0);
+  EXPECT_FALSE(guard.all_within());
+  EXPECT_GT(guard.excursion_since(all, flight, xhold, 0.0, h), 0.0);
+  guard.start_run(true);
+  guard.set_stats(speed * speed, 0.0);
+  EXPECT_GT(guard.excursion_since(all, flight, xhold, 0.0, h), 0.0);
+  guard.start_run(false);
+  guard.set_stats(speed * speed, 0.0);
+  for (int step = 0; step < 3; ++step) {
+    guard.step(h);
+    EXPECT_GT(guard.excursion_since(all, flight, xhold, 0.0, h), 0.0);
   }
 }
