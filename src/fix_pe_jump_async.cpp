@@ -1311,7 +1311,12 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
   const double coarse_step = clocks->start() + h_step;
   const double kick_fine = 2.0 * h_step * force->ftm2v;
   const double kick_coarse = 2.0 * coarse_step * force->ftm2v;
-  const auto one = [&](int i) {
+  const int *mask = atom->mask;
+  const int nlocal = atom->nlocal;
+  // (a plain loop and local maxima: the compiler keeps them in registers)
+  double most_fine[2] = {mag[0][0], mag[0][1]}, most_slow[2] = {mag[1][0], mag[1][1]};
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & groupbit)) continue;
     const double dt = (tpos[i] == AsyncClocks::MOVING) ? rest : coarse_step - tpos[i];
     if (fstart)
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
@@ -1320,7 +1325,7 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
     const double inv = rmass ? 1.0 / rmass[i] : minv[type[i]];
     if (!slow[i]) {
       for (int k = 0; k < 3; k++) x[i][k] += dt * v[i][k];
-      PEJump::TwoStep::jump_one(kick_fine * inv, fa, v[i], jump[i], mag[0]);
+      PEJump::TwoStep::jump_one(kick_fine * inv, fa, v[i], jump[i], most_fine);
     } else {
       double fslow[3];
       for (int k = 0; k < 3; k++) {
@@ -1329,12 +1334,15 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
         v[i][k] += 0.5 * jump[i][k];    // into its step
         x[i][k] += dt * v[i][k];
       }
-      PEJump::TwoStep::jump_one(kick_coarse * inv, fslow, v[i], jump[i], mag[1]);
+      PEJump::TwoStep::jump_one(kick_coarse * inv, fslow, v[i], jump[i], most_slow);
     }
     if (vsig) vsig[i] = PEJump::velocity_fingerprint(v[i]);
     tpos[i] = moving[i] ? AsyncClocks::MOVING : 0.0;    // at the next coarse step's start
-  };
-  group_atoms().each(atom->mask, atom->nlocal, one);
+  }
+  for (int k = 0; k < 2; k++) {
+    mag[0][k] = most_fine[k];
+    mag[1][k] = most_slow[k];
+  }
   guard->set_slow_stats(mag[1][0], mag[1][1]);
 }
 
