@@ -661,18 +661,19 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
 }
 
 /* ----------------------------------------------------------------------
-   true if the next step can begin as this one ends (finish_step() moves
-   the atoms on to its primary node): a single-node rule without split or
-   step-size history, nothing that looks at the atoms or may change their
-   velocities in between, lists checked by distance, and no timeout that
-   may end the run before the next step
+   true if the next step can begin as this one ends (the jump loop moves
+   the atoms on to its primary node): a single-node rule or a Lobatto rule
+   (the primary node is the step end: the other nodes are sampled from
+   there), without split or step-size history, nothing that looks at the
+   atoms or may change their velocities in between, lists checked by
+   distance, and no timeout that may end the run before the next step
 ------------------------------------------------------------------------- */
 
 bool FixPEJump::may_open_ahead() const
 {
-  return (rule->size() == 1) && !split_primary() && !steps->keeps_history() && !damping->active() &&
-      neighbor->dist_check && !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) &&
-      !others->step_observed() && !timer->has_timeout();
+  return ((rule->size() == 1) || rule->has_end_nodes()) && !split_primary() &&
+      !steps->keeps_history() && !damping->active() && neighbor->dist_check && !reinit_pending &&
+      !watch(OtherFixes::BETWEEN_STEPS) && !others->step_observed() && !timer->has_timeout();
 }
 
 /* ----------------------------------------------------------------------
