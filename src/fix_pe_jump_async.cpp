@@ -1216,9 +1216,13 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
   }
   const double at = clocks->start() + rule->node[rule->primary()] * h_step;
   split->activate(InteractionSplit::COARSE);
+  // the fine evaluation left forces on the atoms that move on fine steps
+  // only, unless fixes add forces or atoms outside the group take part
+  if (!others->add_forces() && (igroup == 0)) nodes->zero_forces_but(&assign->moving_atoms);
   const int evaluated =
       nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
                        group_atoms(&assign->slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
+  nodes->zero_forces_but(nullptr);
   evals_step += evaluated * node_cost();
   split->restore();
 }
@@ -1384,20 +1388,25 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
       watch(opened_ahead ? OtherFixes::INSIDE_STEP : OtherFixes::BETWEEN_STEPS);
   scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
                     {h_step, rest, ahead, fstart ? fsample : nullptr, fingerprint}, mag);
-  for (const int i : assign->slow_moving)
-    for (int k = 0; k < 3; k++) {
-      x[i][k] += rest * vhalf(i, k);
-      if (opened_ahead) x[i][k] += ahead * vhalf(i, k);
-    }
   // forces on interior slow atoms come only from fixes that add forces
   // (fix enforce2d, the only other one allowed, zeroes a zero component)
-  for (const int i : others->add_forces() ? assign->slow_atoms : assign->slow_moving) {
+  const auto collect = [&](int i) {
     const double *fa = moving[i] ? favg[i] : f[i];
     for (int k = 0; k < 3; k++) {
       if (fstart) fstart[i][k] = fsample[i][k];
       facc[i][k] += h_step * fa[k];
     }
+  };
+  const bool all_slow = others->add_forces();
+  for (const int i : assign->slow_moving) {
+    for (int k = 0; k < 3; k++) {
+      x[i][k] += rest * vhalf(i, k);
+      if (opened_ahead) x[i][k] += ahead * vhalf(i, k);
+    }
+    if (!all_slow) collect(i);
   }
+  if (all_slow)
+    for (const int i : assign->slow_atoms) collect(i);
 }
 
 /* ----------------------------------------------------------------------

@@ -36,8 +36,8 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 NodeSampler::NodeSampler(LAMMPS *lmp, ForceSampler *forces) :
-    Pointers(lmp), sampler(forces), xkept(nullptr), fkept(nullptr), nkept(0), keeping(false),
-    shift_time(false), ghosts_away(false), eflag_step(0), vflag_step(0)
+    Pointers(lmp), sampler(forces), nonzero_forces(nullptr), xkept(nullptr), fkept(nullptr),
+    nkept(0), keeping(false), shift_time(false), ghosts_away(false), eflag_step(0), vflag_step(0)
 {
 }
 
@@ -70,7 +70,8 @@ void NodeSampler::make_room()
 NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomList *atoms,
                         bool keep_forces) :
     nodes(sampler),
-    which(positions), list(atoms), forces(keep_forces), touched(sampler.sampler->touches())
+    which(positions), list(atoms), forces(keep_forces), touched(sampler.sampler->touches()),
+    nonzero(sampler.nonzero_forces)
 {
   if (nodes.keeping) nodes.error->one(FLERR, "Fix pe_jump: nested NodeSampler::Keep (bug)");
   nodes.keeping = true;
@@ -107,6 +108,13 @@ NodeSampler::Keep::~Keep()
 
 void NodeSampler::Keep::copy_forces(double **from, double **to) const
 {
+  if (!touched && nonzero) {
+    // (putting back: the others' forces were zero)
+    if (from == nodes.fkept) memset(&to[0][0], 0, 3 * sizeof(double) * nodes.atom->nlocal);
+    for (const int i : *nonzero)
+      for (int k = 0; k < 3; k++) to[i][k] = from[i][k];
+    return;
+  }
   if (!touched) {
     memcpy(&to[0][0], &from[0][0], 3 * sizeof(double) * nodes.atom->nlocal);
     return;

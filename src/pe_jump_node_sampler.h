@@ -83,8 +83,14 @@ namespace PEJump {
       const AtomList *list;
       bool forces;
       const ForceSampler::Touched *touched;    // the sampler touches these only
+      const AtomList *nonzero;                 // the others' forces are zero
       void copy_forces(double **from, double **to) const;
     };
+
+    // the owned atoms but those listed have zero forces (nullptr: unknown):
+    // a Keep then keeps the forces of those listed and puts zeros back for
+    // the others
+    void zero_forces_but(const AtomList *atoms) { nonzero_forces = atoms; }
 
     // move the atoms of set to x + shift v and compute the contributions in
     // mask there (forces only); needs a Keep with their positions. If the
@@ -155,6 +161,7 @@ namespace PEJump {
 
    private:
     ForceSampler *sampler;
+    const AtomList *nonzero_forces;
     double **xkept, **fkept;
     int nkept;    // room for this many owned atoms
     bool keeping;
