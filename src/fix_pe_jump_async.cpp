@@ -1183,12 +1183,16 @@ void FixPEJumpAsync::fine_quadrature_sum()
   // step the coarse evaluations overwrite it
   if (reuse_start && atom->nlocal && clocks->last_fine_step())
     memcpy(&work->get(SAMPLE)[0][0], &f[0][0], 3 * sizeof(double) * atom->nlocal);
+  // (the end node's forces are the next start node's once read)
   for (const int i : moving) {
     if (reuse_start && std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = f[i][k];
     for (int k = 0; k < 3; k++) {
       fsum[i][k] = wp * f[i][k];
-      if (reuse_start) fsum[i][k] += rule->weight[0] * fstart[i][k];
+      if (reuse_start) {
+        fsum[i][k] += rule->weight[0] * fstart[i][k];
+        fstart[i][k] = f[i][k];
+      }
     }
   }
   const int first = reuse_start ? 1 : 0;
@@ -1353,16 +1357,17 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
 /* ----------------------------------------------------------------------
    true if the next fine step, inside the same coarse step, can begin as
    this one ends (continue_fine_step() opens it and moves the moving atoms
-   on to its primary node): a single-node rule, nothing that looks at the
-   atoms or may change their velocities in between, lists checked by
-   distance, no timeout that may end the run before the next step
+   on to its primary node): a single-node rule or a Lobatto rule (its
+   primary node is the step end), nothing that looks at the atoms or may
+   change their velocities in between, lists checked by distance, no
+   timeout that may end the run before the next step
 ------------------------------------------------------------------------- */
 
 bool FixPEJumpAsync::may_open_ahead() const
 {
-  return (rule->size() == 1) && !clocks->next_is_last() && neighbor->dist_check &&
-      !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) && !others->step_observed() &&
-      !timer->has_timeout();
+  return ((rule->size() == 1) || rule->has_end_nodes()) && !clocks->next_is_last() &&
+      neighbor->dist_check && !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) &&
+      !others->step_observed() && !timer->has_timeout();
 }
 
 /* ----------------------------------------------------------------------
@@ -1387,7 +1392,7 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
   const bool fingerprint =
       watch(opened_ahead ? OtherFixes::INSIDE_STEP : OtherFixes::BETWEEN_STEPS);
   scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
-                    {h_step, rest, ahead, fstart ? fsample : nullptr, fingerprint}, mag);
+                    {h_step, rest, ahead, nullptr, fingerprint}, mag);
   // forces on interior slow atoms come only from fixes that add forces
   // (fix enforce2d, the only other one allowed, zeroes a zero component)
   const auto collect = [&](int i) {
