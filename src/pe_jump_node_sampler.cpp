@@ -37,7 +37,8 @@ using namespace LAMMPS_NS::PEJump;
 
 NodeSampler::NodeSampler(LAMMPS *lmp, ForceSampler *forces) :
     Pointers(lmp), sampler(forces), nonzero_forces(nullptr), xkept(nullptr), fkept(nullptr),
-    nkept(0), keeping(false), shift_time(false), ghosts_away(false), eflag_step(0), vflag_step(0)
+    nkept(0), keeping(false), keep_on_move(false), shift_time(false), ghosts_away(false),
+    eflag_step(0), vflag_step(0)
 {
 }
 
@@ -84,6 +85,7 @@ NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomLis
   if (which == LISTED)
     for (const int i : *list)
       for (int k = 0; k < 3; k++) nodes.xkept[i][k] = x[i][k];
+  nodes.keep_on_move = (which == SET_ON_MOVE);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -91,11 +93,15 @@ NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomLis
 NodeSampler::Keep::~Keep()
 {
   nodes.keeping = false;
+  // (SET_ON_MOVE without a move: the positions are those kept)
+  const bool moved = !nodes.keep_on_move;
+  nodes.keep_on_move = false;
   const size_t nbytes = 3 * sizeof(double) * nodes.atom->nlocal;
   if (!nbytes) return;
   double **x = nodes.atom->x;
-  if (which == ALL_OWNED) memcpy(&x[0][0], &nodes.xkept[0][0], nbytes);
-  if (which == LISTED)
+  if ((which == ALL_OWNED) || ((which == SET_ON_MOVE) && moved && !list))
+    memcpy(&x[0][0], &nodes.xkept[0][0], nbytes);
+  if ((which == LISTED) || ((which == SET_ON_MOVE) && moved && list))
     for (const int i : *list)
       for (int k = 0; k < 3; k++) x[i][k] = nodes.xkept[i][k];
   if (forces) copy_forces(nodes.fkept, nodes.atom->f);
@@ -129,10 +135,19 @@ void NodeSampler::Keep::copy_forces(double **from, double **to) const
 void NodeSampler::evaluate_at(double shift, const FreeFlight &v, const AtomSet &set, int mask)
 {
   double **x = atom->x;
-  const auto move = [&](int i) {
-    for (int k = 0; k < 3; k++) x[i][k] = xkept[i][k] + shift * v(i, k);
-  };
-  set.each(atom->mask, atom->nlocal, move);
+  if (keep_on_move) {
+    set.each(atom->mask, atom->nlocal, [&](int i) {
+      for (int k = 0; k < 3; k++) {
+        xkept[i][k] = x[i][k];
+        x[i][k] = xkept[i][k] + shift * v(i, k);
+      }
+    });
+    keep_on_move = false;
+  } else {
+    set.each(atom->mask, atom->nlocal, [&](int i) {
+      for (int k = 0; k < 3; k++) x[i][k] = xkept[i][k] + shift * v(i, k);
+    });
+  }
   const double now = update->atime;
   if (shift_time) update->atime = now + shift;
   sampler->compute(mask, 0, 0);
@@ -146,7 +161,10 @@ int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double s
                            const FreeFlight &v, const AtomSet &set, int mask, double **acc,
                            double **fend, bool keep_forces)
 {
-  Keep keep(*this, set.list ? LISTED : ALL_OWNED, set.list, keep_forces);
+  // the positions are kept as the first node moves the atoms of set (of
+  // all owned atoms without a list: those outside the group are kept too)
+  const bool all_owned = !set.list && (set.groupbit != 1);
+  Keep keep(*this, all_owned ? ALL_OWNED : SET_ON_MOVE, set.list, keep_forces);
   double **f = atom->f;
   const int last = rule.size() - 1;
   int evaluated = 0;

@@ -68,7 +68,10 @@ namespace PEJump {
     NodeSampler(class LAMMPS *, ForceSampler *);
     ~NodeSampler() override;
 
-    enum Positions { FORCES_ONLY, ALL_OWNED, LISTED };
+    // the positions kept: none, all owned atoms, those listed; or those
+    // that the first evaluate_at() moves, in the same pass (SET_ON_MOVE:
+    // for a Keep whose atoms are those of every evaluate_at())
+    enum Positions { FORCES_ONLY, ALL_OWNED, LISTED, SET_ON_MOVE };
     class Keep {
      public:
       // forces: false if the caller does not need the forces afterwards
@@ -165,6 +168,7 @@ namespace PEJump {
     double **xkept, **fkept;
     int nkept;    // room for this many owned atoms
     bool keeping;
+    bool keep_on_move;    // the next evaluate_at() keeps the positions it moves
     bool shift_time;
     bool ghosts_away;    // evaluate_at() moved the ghosts since the step end's communication
     int eflag_step, vflag_step;
