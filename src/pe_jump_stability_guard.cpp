@@ -146,9 +146,11 @@ double StabilityGuard::excursion(const AtomSet &set, const FreeFlight &vel, doub
 
 double StabilityGuard::travel(double t, double speed2, int moves) const
 {
+  // (LAMMPS sets the bounding box of a tilted box only)
+  const double *lo = domain->triclinic ? domain->boxlo_bound : domain->boxlo;
+  const double *hi = domain->triclinic ? domain->boxhi_bound : domain->boxhi;
   double extent = 0.0;
-  for (int k = 0; k < 3; k++)
-    extent = MAX(extent, MAX(fabs(domain->boxlo_bound[k]), fabs(domain->boxhi_bound[k])));
+  for (int k = 0; k < 3; k++) extent = MAX(extent, MAX(fabs(lo[k]), fabs(hi[k])));
   extent += neighbor->skin;
   return t * sqrt(speed2) * (1.0 + SPEED_MARGIN) + moves * POSITION_ROUNDING * extent;
 }
