@@ -1126,9 +1126,11 @@ void FixPEJumpAsync::check_lists()
     local[2] = MAX(hf2 * guard->jump2(), hs2 * guard->slow_jump2());
     local[3] = MAX(guard->jump2(), guard->slow_jump2());
     local[4] = MAX(guard->speed2(), guard->slow_speed2());
+    // (whether LAMMPS' check of the step ends covers the nodes is a matter
+    // of where they lie in the step, wherever the atoms are now)
     const double lo = (c_lo - from) * h_step, hi = (c_hi - from) * h_step;
     if (xhold && (tally || unchecked || (rule->size() > 1)) &&
-        !guard->ends_checked(*rule, lo, hi, h_step))
+        !guard->ends_checked(*rule, c_lo * h_step, c_hi * h_step, h_step))
       local[0] =
           guard->excursion_since(group_atoms(&assign->moving_atoms), free_flight(), xhold, lo, hi);
     else

@@ -2060,3 +2060,33 @@ TEST(PEJumpAsync, RestartInsideACoarseStepKeepsTheMomentum)
     EXPECT_NEAR(p1[1], p0[1], 1e-10) << cmds.back();
   }
 }
+
+// a fine step that begins in the jump loop of the one before (nothing
+// looks in between) is the step begun at its start: the same positions
+// and the same list builds. A timeout keeps the fixes from beginning steps
+// ahead (the run may end before the next step) and changes nothing else.
+// With neigh_modify once yes (LAMMPS checks no distances) a Lobatto step
+// begun ahead measured its nodes from the step end and asked for list
+// builds that the step begun at its start does not (13 against 11).
+TEST(PEJumpAsync, StepsBegunAheadCheckTheListsAsStepsBegunAtTheirStart)
+{
+  for (const std::string fix :
+       {"pe_jump/async 10 fast quadrature lobatto 3", "pe_jump/async 10 fast quadrature midpoint",
+        "pe_jump quadrature lobatto 3"})
+    for (const std::string lists : {"once yes", "once no"}) {
+      std::vector<double> x[2];
+      LAMMPS_NS::bigint builds[2];
+      for (int timeout = 0; timeout < 2; ++timeout) {
+        Sim s;
+        lj_liquid(s, 5);
+        s.cmds({"neigh_modify " + lists, "region rfast block 0 2.5 INF INF INF INF units lattice",
+                "group fast region rfast", "fix int all " + fix, "timestep 0.002", "thermo 10"});
+        if (timeout) s.cmd("timer timeout 10:00:00 every 1");
+        s.cmd("run 300");
+        x[timeout] = positions(s);
+        builds[timeout] = s.lmp->neighbor->ncalls;
+      }
+      EXPECT_EQ(max_diff(x[0], x[1]), 0.0) << fix << ", " << lists;
+      EXPECT_EQ(builds[0], builds[1]) << fix << ", " << lists;
+    }
+}
