@@ -161,8 +161,9 @@ int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double s
                            const FreeFlight &v, const AtomSet &set, int mask, double **acc,
                            double **fend, bool keep_forces)
 {
-  // the positions are kept as the first node moves the atoms of set (of
-  // all owned atoms without a list: those outside the group are kept too)
+  // the positions are kept as the first node moves the atoms of set; a set
+  // of a group other than all keeps every owned atom before (and puts every
+  // one back)
   const bool all_owned = !set.list && (set.groupbit != 1);
   Keep keep(*this, all_owned ? ALL_OWNED : SET_ON_MOVE, set.list, keep_forces);
   double **f = atom->f;
