@@ -1223,8 +1223,9 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
   const double at = clocks->start() + rule->node[rule->primary()] * h_step;
   split->activate(InteractionSplit::COARSE);
   // the fine evaluation left forces on the atoms that move on fine steps
-  // only, unless fixes add forces or atoms outside the group take part
-  if (!others->add_forces() && (igroup == 0)) nodes->zero_forces_but(&assign->moving_atoms);
+  // only (no fix adds forces, refuse_other_fixes()), unless atoms outside
+  // the group take part
+  if (igroup == 0) nodes->zero_forces_but(&assign->moving_atoms);
   const int evaluated =
       nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
                        group_atoms(&assign->slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
@@ -1374,18 +1375,14 @@ bool FixPEJumpAsync::may_open_ahead() const
 
 /* ----------------------------------------------------------------------
    inside a coarse step: the atoms on the fine clock take a synchronous
-   step; of the slow atoms those in a fine interaction move on, and they
-   (and the others, if other fixes add forces) collect the fine forces
+   step; of the slow atoms those in a fine interaction move on and collect
+   the fine forces
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
 {
   double **x = atom->x;
-  double **f = atom->f;
   double **facc = state->vec(FACC);
-  double **fstart = scheme->fstart();
-  double **fsample = f;    // the end node's forces (fine_quadrature_sum())
-  const int *moving = assign->moving();
   const PEJump::FreeFlight vhalf = free_flight();
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   opened_ahead = may_open_ahead();
@@ -1395,25 +1392,16 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
       watch(opened_ahead ? OtherFixes::INSIDE_STEP : OtherFixes::BETWEEN_STEPS);
   scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
                     {h_step, rest, ahead, nullptr, fingerprint}, mag);
-  // forces on interior slow atoms come only from fixes that add forces
-  // (fix enforce2d, the only other one allowed, zeroes a zero component)
-  const auto collect = [&](int i) {
-    const double *fa = moving[i] ? favg[i] : f[i];
-    for (int k = 0; k < 3; k++) {
-      if (fstart) fstart[i][k] = fsample[i][k];
-      facc[i][k] += h_step * fa[k];
-    }
-  };
-  const bool all_slow = others->add_forces();
-  for (const int i : assign->slow_moving) {
+  // the interior slow atoms get no fine forces: the fix refuses fixes that
+  // add forces (refuse_other_fixes(); fix enforce2d, the only other one
+  // allowed, zeroes a zero component). A Lobatto rule's next start node
+  // was kept by fine_quadrature_sum()
+  for (const int i : assign->slow_moving)
     for (int k = 0; k < 3; k++) {
       x[i][k] += rest * vhalf(i, k);
       if (opened_ahead) x[i][k] += ahead * vhalf(i, k);
+      facc[i][k] += h_step * favg[i][k];
     }
-    if (!all_slow) collect(i);
-  }
-  if (all_slow)
-    for (const int i : assign->slow_atoms) collect(i);
 }
 
 /* ----------------------------------------------------------------------
