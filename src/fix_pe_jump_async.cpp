@@ -1180,9 +1180,9 @@ void FixPEJumpAsync::fine_quadrature_sum()
   double **fsum = work->get(SUM);
   const AtomList &moving = assign->moving_atoms;
 
-  // the end node's forces are the next step's start node; inside a coarse
-  // step they stay in f (the node evaluations put f back), on the last fine
-  // step the coarse evaluations overwrite it
+  // the end node's forces are the next step's start node (fstart); on the
+  // last fine step every atom's are kept for reach_coarse_node(), which the
+  // coarse evaluations overwrite in f
   if (reuse_start && atom->nlocal && clocks->last_fine_step())
     memcpy(&work->get(SAMPLE)[0][0], &f[0][0], 3 * sizeof(double) * atom->nlocal);
   // (the end node's forces are the next start node's once read)
@@ -1201,8 +1201,22 @@ void FixPEJumpAsync::fine_quadrature_sum()
   if (rule->size() - first <= 1) return;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
-                       group_atoms(&moving), opts.sample_mask, fsum, nullptr, true);
+                       group_atoms(&moving), opts.sample_mask, fsum, nullptr, step_forces_read());
   evals_step += evaluated * node_cost();
+}
+
+/* ----------------------------------------------------------------------
+   true if anything reads atom->f between this fine step's end and the
+   force clearing of the next step: the coarse evaluation of the last fine
+   step, output and fixes at the end of the step, other time integrators
+   (after this fix), fixes that act between the steps. Elsewhere the node
+   evaluations inside the step need not put the forces of the step end back
+------------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::step_forces_read() const
+{
+  return clocks->last_fine_step() || others->step_observed() || others->integrate_others() ||
+      watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
 }
 
 /* ----------------------------------------------------------------------

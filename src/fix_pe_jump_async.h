@@ -158,6 +158,7 @@ class FixPEJumpAsync : public Fix {
   void slow_magnitudes();
   void catch_up_all();    // the atoms that sit out fine steps catch up
   double node_cost() const;
+  bool step_forces_read() const;
   void fine_quadrature_sum();
   void coarse_quadrature_sum(double coarse_step);
   void reach_coarse_node(double **favg, double mag[2][2]);
