@@ -112,7 +112,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   reinit_pending = opened_ahead = before_open = 0;
   h_step = 0.0;
   end_time = 0.0;
-  evals_step = evals_total = 0.0;
+  evals = {};
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
   scheme->fresh = 0;
@@ -271,7 +271,7 @@ void FixPEJump::setup(int /*vflag*/)
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
                    !domain->box_change);
   opened_ahead = 0;
-  evals_step = 0.0;
+  evals.step = 0.0;
   // a new time step between runs: the jumps fit the old one (restart), unless
   // they are to be carried over (compensate given, or adapt)
   scheme->agree_on_started(group_atoms(), style, (opts.compensate < 0) && !steps->adapts(),
@@ -563,7 +563,7 @@ void FixPEJump::pre_reverse(int eflag, int vflag)
 void FixPEJump::final_integrate()
 {
   grow_work();
-  evals_step = 1.0;
+  evals.step = 1.0;
 
   // a velocity changed by another fix during the step (wall/reflect, ...)
   // changed the free-flight velocity, which atom->v holds: an impulse
@@ -595,7 +595,7 @@ void FixPEJump::final_integrate()
     nodes->ghosts_with_owned(others->step_observed());
   if (others->integrate_others() && (neighbor->ago == 0) && !rule->only_end_nodes())
     others->refuse_interactions(rule->name().c_str());
-  evals_total += evals_step;
+  evals.total += evals.step;
   scheme->forget_energies();
   steps->step_done(h_step);
 }
@@ -686,7 +686,7 @@ bool FixPEJump::may_open_ahead() const
 
 void FixPEJump::tally_at_node()
 {
-  evals_step +=
+  evals.step +=
       nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
 }
 
@@ -778,7 +778,7 @@ void FixPEJump::primary_sampled_force()
     NodeSampler::Keep keep(*nodes);
     sampler->compute(opts.sample_mask, 0, 0);
     if (nlocal) memcpy(&fsample()[0][0], &atom->f[0][0], nbytes);
-    evals_step += sampler->fraction(opts.sample_mask);
+    evals.step += sampler->fraction(opts.sample_mask);
   }
   // at setup, fixes after this one have not yet acted on the forces
   if (sampler->has_projections() && (split_primary() || update->setupflag)) project_sampled();
@@ -872,7 +872,7 @@ void FixPEJump::quadrature_sum()
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
                        group_atoms(), opts.sample_mask, fsum(), nullptr, keep_forces);
-  evals_step += evaluated * sampler->fraction(opts.sample_mask);
+  evals.step += evaluated * sampler->fraction(opts.sample_mask);
   if (!keep_forces && atom->nlocal && (others->step_observed() || nodes->tally_step()))
     memcpy(&atom->f[0][0], &fstart[0][0], 3 * sizeof(double) * atom->nlocal);
 }
@@ -893,7 +893,7 @@ void FixPEJump::auto_quadrature_sum()
   });
   const int evaluated = automatic->sum(*nodes, opts.sample_mask, group_atoms(), free_flight(),
                                        h_step, fstart, fsample(), fsum());
-  evals_step += evaluated * sampler->fraction(opts.sample_mask);
+  evals.step += evaluated * sampler->fraction(opts.sample_mask);
   // the end node is the start node of the next step
   for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
@@ -1031,9 +1031,9 @@ double FixPEJump::compute_vector(int n)
     case 2:
       return update->dt;
     case 3:
-      return evals_step;
+      return evals.step;
     case 4:
-      return evals_total;
+      return evals.total;
   }
   return 0.0;
 }
@@ -1117,7 +1117,7 @@ void FixPEJump::global_state(double *list) const
   list[0] = ((scheme->started > 0) ? 1 : 0) + 2 + (damping->kicked() ? 4 : 0);
   list[1] = rule->family();
   list[2] = rule->points();
-  list[3] = evals_total;
+  list[3] = evals.total;
   steps->save(&list[4]);
   scheme->save_census(&list[6]);
 }
@@ -1131,7 +1131,7 @@ void FixPEJump::restart(char *buf)
       (static_cast<int>(list[2]) == rule->points());
   const int head = static_cast<int>(list[0]);
   scheme->started = ((head & 1) != 0) && same_rule;
-  evals_total = list[3];
+  evals.total = list[3];
   steps->load(&list[4]);
   if (head >= 2) scheme->load_census(&list[6]);
   damping->set_kicked((head & 4) != 0);

@@ -97,13 +97,13 @@ class FixPEJump : public Fix {
   PEJump::OtherFixes *others;
   PEJump::WorkForces *work;    // SUM: the quadrature sum, SAMPLE: the sampled primary force
 
-  int reinit_pending;                // redo the initial kick when all fix forces are in
-  int opened_ahead;                  // the last step began this one already
-  int before_open;                   // atom->v holds v^n while this step's nodes are checked
-  double advance_pending;            // free flight left for after this step's list build
-  double h_step;                     // step size used in the current step
-  double end_time;                   // update->atime of the step; the node's during it
-  double evals_step, evals_total;    // force evaluations (units of full ones)
+  int reinit_pending;           // redo the initial kick when all fix forces are in
+  int opened_ahead;             // the last step began this one already
+  int before_open;              // atom->v holds v^n while this step's nodes are checked
+  double advance_pending;       // free flight left for after this step's list build
+  double h_step;                // step size used in the current step
+  double end_time;              // update->atime of the step; the node's during it
+  PEJump::Evaluations evals;    // force evaluations
 
   enum { SUM, SAMPLE };
   // (inline: the loops take them per atom)

@@ -77,8 +77,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
     assign(nullptr), classes(nullptr), work(nullptr), first(nullptr), reinit_pending(0),
-    opened_ahead(0), build_ahead(0.0), h_step(0.0), evals_step(0.0), evals_total(0.0),
-    changes_seen(0)
+    opened_ahead(0), build_ahead(0.0), changes_seen(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -462,6 +461,7 @@ void FixPEJumpAsync::advance(double t)
 
 void FixPEJumpAsync::all_to_primary_node(double t)
 {
+  const double h_step = update->dt;    // the fine step
   const int first_node = rule->has_end_nodes() ? 1 : 0;
   const double c_lo = rule->node[first_node];
   const double elapsed = clocks->start(), span = elapsed + h_step;
@@ -539,7 +539,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   grow_work();
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
                    !domain->box_change);
-  evals_step = 0.0;
+  evals.step = 0.0;
   if (!scheme->started)
     start_scheme(nullptr, true);
   else
@@ -726,12 +726,12 @@ void FixPEJumpAsync::setup_pre_reverse(int eflag, int vflag)
 
 void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 {
+  const double h_step = update->dt;    // the fine step
   if (scheme->awaits_setup() &&
       scheme->check_run_without_setup(style, group_atoms(), assign->changed()))
     next_reneighbor = update->ntimestep;
   if (reinit_pending) start_scheme(nullptr, false);
   reinit_pending = 0;
-  h_step = update->dt;
   if (clocks->at_coarse_node() && scheme->started) change_clocks();
   if (!opened_ahead) {
     node_impulses();
@@ -761,6 +761,7 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 
 void FixPEJumpAsync::ahead_for_build()
 {
+  const double h_step = update->dt;    // the fine step
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   clocks->moving_at(h_step);
   clocks->catch_up_all(free_flight(), assign->moving());
@@ -774,7 +775,7 @@ void FixPEJumpAsync::ahead_for_build()
 void FixPEJumpAsync::back_from_build()
 {
   move_moving(-build_ahead);
-  clocks->moving_at(rule->node[rule->primary()] * h_step);
+  clocks->moving_at(rule->node[rule->primary()] * update->dt);
   build_ahead = 0.0;
   comm->forward_comm();
 }
@@ -817,7 +818,7 @@ void FixPEJumpAsync::change_clocks()
       (split->fraction(InteractionSplit::FINE) < 0.5);
   if (by_subsets) {
     grow_work();
-    evals_total += fine_forces_at_node(work->get(COARSE), nullptr);
+    evals.total += fine_forces_at_node(work->get(COARSE), nullptr);
   }
   // the buffer layers are the partners within the cutoff at the node: the
   // ghost atoms must be there too (without energy output at the node they
@@ -844,15 +845,15 @@ void FixPEJumpAsync::change_clocks()
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) total[i][k] = fstart[i][k] + fstart_coarse[i][k];
     restart_jumps(to_fine, total);
-    evals_total += 1.0;
+    evals.total += 1.0;
   } else if (by_subsets) {
-    evals_total += fine_forces_at_node(work->get(COARSE), &to_fine);
+    evals.total += fine_forces_at_node(work->get(COARSE), &to_fine);
     restart_jumps(to_fine, work->get(COARSE));
   } else {
     NodeSampler::Keep keep(*nodes);
     sampler->compute(ForceSampler::ALL, 0, 0);
     restart_jumps(to_fine, atom->f);
-    evals_total += 1.0;
+    evals.total += 1.0;
   }
   guard->forget_stats();
   slow_magnitudes();
@@ -988,7 +989,7 @@ std::string FixPEJumpAsync::instability_advice() const
                      "their coupling at the interface, which has resonances (see the stability "
                      "section of the fix pe_jump/async documentation), is unstable: reduce the "
                      "time step or change K{}",
-                     h_step, clocks->steps() * h_step,
+                     update->dt, clocks->steps() * update->dt,
                      opts.buffer_layers ? ""
                                         : ", or add the keyword buffer 1 (the slow partners of "
                                           "the interface then take the fine step)");
@@ -1102,6 +1103,7 @@ void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 
 void FixPEJumpAsync::check_lists()
 {
+  const double h_step = update->dt;    // the fine step
   const int first_node = rule->has_end_nodes() ? 1 : 0;
   const double c_lo = rule->node[first_node];
   const bool tally = nodes->step_end_evaluated();
@@ -1200,9 +1202,9 @@ void FixPEJumpAsync::fine_quadrature_sum()
   const int first = reuse_start ? 1 : 0;
   if (rule->size() - first <= 1) return;
   const int evaluated =
-      nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
+      nodes->sum_nodes(*rule, first, p, update->dt, -rule->node[p] * update->dt, free_flight(),
                        group_atoms(&moving), opts.sample_mask, fsum, nullptr, step_forces_read());
-  evals_step += evaluated * node_cost();
+  evals.step += evaluated * node_cost();
 }
 
 /* ----------------------------------------------------------------------
@@ -1234,7 +1236,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
     for (int k = 0; k < 3; k++)
       fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
   }
-  const double at = clocks->start() + rule->node[rule->primary()] * h_step;
+  const double at = clocks->start() + rule->node[rule->primary()] * update->dt;
   split->activate(InteractionSplit::COARSE);
   // the fine evaluation left forces on the atoms that move on fine steps
   // only (no fix adds forces, refuse_other_fixes()), unless atoms outside
@@ -1244,7 +1246,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
       nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
                        group_atoms(&assign->slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
   nodes->zero_forces_but(nullptr);
-  evals_step += evaluated * node_cost();
+  evals.step += evaluated * node_cost();
   split->restore();
 }
 
@@ -1257,6 +1259,7 @@ void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
 
 void FixPEJumpAsync::final_integrate()
 {
+  const double h_step = update->dt;    // the fine step
   const bool coarse_end = clocks->last_fine_step();
   // a slow atom keeps its velocity over the coarse step: a change by a fix
   // inside any of its fine steps is still there at the last one
@@ -1266,7 +1269,7 @@ void FixPEJumpAsync::final_integrate()
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the fine quadrature average itself
-  evals_step = split->fraction(InteractionSplit::FINE);
+  evals.step = split->fraction(InteractionSplit::FINE);
   const bool direct = (rule->size() == 1);
   if (!direct) {
     // with neigh_modify include the node evaluations clear and keep the
@@ -1297,9 +1300,9 @@ void FixPEJumpAsync::final_integrate()
   const double at_end =
       nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
   split->restore();
-  evals_step += at_end;
+  evals.step += at_end;
   if (at_end > 0.0) first->forces_written();    // on every atom
-  evals_total += evals_step;
+  evals.total += evals.step;
   scheme->forget_energies();
 
   // the labels are output only: take them where something looks, when
@@ -1317,6 +1320,7 @@ void FixPEJumpAsync::final_integrate()
 
 void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
 {
+  const double h_step = update->dt;    // the fine step
   double **x = atom->x;
   double **v = atom->v;
   double **f = atom->f;
@@ -1395,6 +1399,7 @@ bool FixPEJumpAsync::may_open_ahead() const
 
 void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
 {
+  const double h_step = update->dt;    // the fine step
   double **x = atom->x;
   double **facc = state->vec(FACC);
   const PEJump::FreeFlight vhalf = free_flight();
@@ -1461,9 +1466,9 @@ double FixPEJumpAsync::compute_vector(int n)
     case 2:
       return update->dt;
     case 3:
-      return evals_step;
+      return evals.step;
     case 4:
-      return evals_total;
+      return evals.total;
     case 5:
       return clocks->at_coarse_node() ? 1.0 : 0.0;
     case 6:
@@ -1576,7 +1581,7 @@ void FixPEJumpAsync::write_restart(FILE *fp)
   // group is dynamic)
   double list[NGLOBAL] = {
       ((scheme->started > 0) ? 1.0 : 0.0) + 2.0 + 4.0 + (assign->dynamic_group() ? 8.0 : 0.0),
-      static_cast<double>(rule->family()), static_cast<double>(rule->points()), evals_total};
+      static_cast<double>(rule->family()), static_cast<double>(rule->points()), evals.total};
   assign->save(&list[9], &list[4], &list[23]);
   clocks->save(&list[6]);
   scheme->save_census(&list[12]);
@@ -1604,7 +1609,7 @@ void FixPEJumpAsync::restart(char *buf)
                "(after multiples of K steps)",
                static_cast<int>(list[7]), static_cast<int>(list[6]));
   scheme->started = ((head & 1) != 0) && same_rule;
-  evals_total = list[3];
+  evals.total = list[3];
   if (head >= 2) scheme->load_census(&list[12]);
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,

@@ -110,12 +110,11 @@ class FixPEJumpAsync : public Fix {
   // (Lobatto rules) the slow-interaction force at the coarse start node
   int FACC, FSTART_COARSE;
 
-  int reinit_pending;    // redo the initial kick when all fix forces are in
-  int opened_ahead;      // the last fine step began this one (nothing looked in between)
-  double build_ahead;    // the moving atoms went on by this for a forced list build
-  double h_step;         // the fine step
-  double evals_step, evals_total;    // force evaluations (units of full ones)
-  int changes_seen;                  // another fix changed a velocity (this rank)
+  int reinit_pending;           // redo the initial kick when all fix forces are in
+  int opened_ahead;             // the last fine step began this one (nothing looked in between)
+  double build_ahead;           // the moving atoms went on by this for a forced list build
+  PEJump::Evaluations evals;    // force evaluations
+  int changes_seen;             // another fix changed a velocity (this rank)
 
   enum { SUM, SAMPLE, COARSE };
   void grow_work();

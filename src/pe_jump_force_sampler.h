@@ -32,6 +32,13 @@ namespace PEJump {
   // on the result. Counts interactions so that evaluations can be reported
   // in units of full force evaluations.
 
+  // force evaluations in units of one evaluation of the whole force field:
+  // those of the current step (the fixes' output vector element 4) and of
+  // all steps so far (element 5, kept in restart files)
+  struct Evaluations {
+    double step = 0.0, total = 0.0;
+  };
+
   class ForceSampler : protected Pointers {
    public:
     enum Contribution {
