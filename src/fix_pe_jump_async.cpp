@@ -1208,17 +1208,19 @@ void FixPEJumpAsync::fine_quadrature_sum()
 }
 
 /* ----------------------------------------------------------------------
-   true if anything reads atom->f between this fine step's end and the
+   true if anything may read atom->f between this fine step's end and the
    force clearing of the next step: the coarse evaluation of the last fine
    step, output and fixes at the end of the step, other time integrators
-   (after this fix), fixes that act between the steps. Elsewhere the node
-   evaluations inside the step need not put the forces of the step end back
+   (after this fix), fixes that act between the steps, a run that a
+   timeout may end here (the next run may start with pre no). Elsewhere
+   the node evaluations inside the step need not put the forces of the
+   step end back
 ------------------------------------------------------------------------- */
 
 bool FixPEJumpAsync::step_forces_read() const
 {
   return clocks->last_fine_step() || others->step_observed() || others->integrate_others() ||
-      watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
+      watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) || timer->has_timeout();
 }
 
 /* ----------------------------------------------------------------------
