@@ -1225,31 +1225,50 @@ bool FixPEJumpAsync::step_forces_read() const
 
 /* ----------------------------------------------------------------------
    fcoarse = sum_k w_k F_slow(q_S^n + c_k H v_S) for the slow atoms, from
-   the positions of the primary fine node; the Lobatto start node is the end
-   node of the previous coarse step
+   the positions of the primary fine node, inside keep (which keeps those
+   positions); the Lobatto start node is the end node of the previous
+   coarse step
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::coarse_quadrature_sum(double coarse_step)
+void FixPEJumpAsync::coarse_quadrature_sum(NodeSampler::Keep &keep, const PEJump::AtomSet &slow)
 {
   const int reuse_start = rule->has_end_nodes();
   double **fstart_coarse = reuse_start ? state->vec(FSTART_COARSE) : nullptr;
   double **fcoarse = work->get(COARSE);
-  for (const int i : assign->slow_atoms) {
-    for (int k = 0; k < 3; k++)
-      fcoarse[i][k] = reuse_start ? rule->weight[0] * fstart_coarse[i][k] : 0.0;
-  }
+  // (without a start node the first node's terms set fcoarse)
+  if (reuse_start)
+    for (const int i : assign->slow_atoms)
+      for (int k = 0; k < 3; k++) fcoarse[i][k] = rule->weight[0] * fstart_coarse[i][k];
+  const double coarse_step = clocks->start() + update->dt;
   const double at = clocks->start() + rule->node[rule->primary()] * update->dt;
   split->activate(InteractionSplit::COARSE);
+  const int evaluated =
+      nodes->sum_nodes_in(keep, *rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
+                          slow, opts.sample_mask, fcoarse, fstart_coarse, reuse_start);
+  evals.step += evaluated * node_cost();
+  split->restore();
+}
+
+/* ----------------------------------------------------------------------
+   the last fine step of a coarse step: the coarse quadrature sum, then
+   every atom reaches the coarse node. The slow atoms move on from their
+   positions at the primary fine node as kept while the coarse nodes moved
+   them (they are not copied back first)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::coarse_node(double **favg, double mag[2][2])
+{
   // the fine evaluation left forces on the atoms that move on fine steps
   // only (no fix adds forces, refuse_other_fixes()), unless atoms outside
   // the group take part
   if (igroup == 0) nodes->zero_forces_but(&assign->moving_atoms);
-  const int evaluated =
-      nodes->sum_nodes(*rule, reuse_start ? 1 : 0, -1, coarse_step, -at, free_flight(),
-                       group_atoms(&assign->slow_atoms), opts.sample_mask, fcoarse, fstart_coarse);
+  const PEJump::AtomSet slow = group_atoms(&assign->slow_atoms);
+  NodeSampler::Keep keep(*nodes, NodeSampler::positions_for(slow), slow.list);
   nodes->zero_forces_but(nullptr);
-  evals.step += evaluated * node_cost();
-  split->restore();
+  coarse_quadrature_sum(keep, slow);
+  keep.forces_back();
+  reach_coarse_node(favg, mag, keep.positions());
+  keep.positions_taken();
 }
 
 /* ----------------------------------------------------------------------
@@ -1282,13 +1301,11 @@ void FixPEJumpAsync::final_integrate()
     sampler->only_touch(nullptr);
     split->restore();
   }
-  if (coarse_end) coarse_quadrature_sum(clocks->start() + h_step);
-
   // per clock: largest |v|^2, |[v]|^2 (the slow atoms' change at coarse nodes)
   double mag[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
   double **favg = direct ? atom->f : work->get(SUM);
   if (coarse_end)
-    reach_coarse_node(favg, mag);
+    coarse_node(favg, mag);
   else
     continue_fine_step(favg, mag[0]);
   guard->set_stats(mag[0][0], mag[0][1]);
@@ -1315,12 +1332,12 @@ void FixPEJumpAsync::final_integrate()
 
 /* ----------------------------------------------------------------------
    the last fine step of a coarse step: every atom reaches the coarse node
-   (the interior slow atoms from where they stopped), the atoms on the fine
-   clock jump with favg, the slow ones with the sums of their fine forces
-   over the coarse step and the coarse quadrature sum
+   from its primary fine node (xslow: the slow atoms' positions there), the
+   atoms on the fine clock jump with favg, the slow ones with the sums of
+   their fine forces over the coarse step and the coarse quadrature sum
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
+void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2], double **xslow)
 {
   const double h_step = update->dt;    // the fine step
   double **x = atom->x;
@@ -1363,7 +1380,7 @@ void FixPEJumpAsync::reach_coarse_node(double **favg, double mag[2][2])
         fslow[k] = (facc[i][k] + h_step * fa[k]) / coarse_step + fcoarse[i][k];
         facc[i][k] = 0.0;
         v[i][k] += 0.5 * jump[i][k];    // into its step
-        x[i][k] += dt * v[i][k];
+        x[i][k] = xslow[i][k] + dt * v[i][k];
       }
       PEJump::TwoStep::jump_one(kick_coarse * inv, fslow, v[i], jump[i], most_slow);
     }

@@ -159,8 +159,9 @@ class FixPEJumpAsync : public Fix {
   double node_cost() const;
   bool step_forces_read() const;
   void fine_quadrature_sum();
-  void coarse_quadrature_sum(double coarse_step);
-  void reach_coarse_node(double **favg, double mag[2][2]);
+  void coarse_quadrature_sum(PEJump::NodeSampler::Keep &, const PEJump::AtomSet &slow);
+  void coarse_node(double **favg, double mag[2][2]);
+  void reach_coarse_node(double **favg, double mag[2][2], double **xslow);
   void continue_fine_step(double **favg, double *mag);
   void show_classes();    // vector_atom follows the state table
   // values of the global restart state: 12, then the census of the last

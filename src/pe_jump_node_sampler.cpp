@@ -107,6 +107,14 @@ NodeSampler::Keep::~Keep()
   if (forces) copy_forces(nodes.fkept, nodes.atom->f);
 }
 
+/* ---------------------------------------------------------------------- */
+
+void NodeSampler::Keep::forces_back()
+{
+  if (forces && nodes.atom->nlocal) copy_forces(nodes.fkept, nodes.atom->f);
+  forces = false;
+}
+
 /* ----------------------------------------------------------------------
    the forces of the owned atoms that the sampler may change (all of them
    unless it touches a part only)
@@ -164,15 +172,22 @@ int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double s
   // the positions are kept as the first node moves the atoms of set; a set
   // of a group other than all keeps every owned atom before (and puts every
   // one back)
-  const bool all_owned = !set.list && (set.groupbit != 1);
-  Keep keep(*this, all_owned ? ALL_OWNED : SET_ON_MOVE, set.list, keep_forces);
+  Keep keep(*this, positions_for(set), set.list, keep_forces);
+  return sum_nodes_in(keep, rule, first, skip, scale, offset, v, set, mask, acc, fend, true);
+}
+
+/* ---------------------------------------------------------------------- */
+
+int NodeSampler::sum_nodes_in(Keep & /*keep*/, const Quadrature &rule, int first, int skip,
+                              double scale, double offset, const FreeFlight &v, const AtomSet &set,
+                              int mask, double **acc, double **fend, bool onto_acc)
+{
   double **f = atom->f;
   const int last = rule.size() - 1;
   int evaluated = 0;
   for (int node = first; node <= last; node++) {
     if (node == skip) continue;
     evaluate_at(scale * rule.node[node] + offset, v, set, mask);
-    ++evaluated;
     const double w = rule.weight[node];
     const bool at_end = fend && (node == last);
     const auto add = [&](int i) {
@@ -182,7 +197,16 @@ int NodeSampler::sum_nodes(const Quadrature &rule, int first, int skip, double s
       if (at_end)
         for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
     };
-    set.each(atom->mask, atom->nlocal, add);
+    const auto replace = [&](int i) {
+      for (int k = 0; k < 3; k++) acc[i][k] = w * f[i][k];
+      if (at_end)
+        for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
+    };
+    if (onto_acc || evaluated)
+      set.each(atom->mask, atom->nlocal, add);
+    else
+      set.each(atom->mask, atom->nlocal, replace);
+    ++evaluated;
   }
   return evaluated;
 }

@@ -80,6 +80,14 @@ namespace PEJump {
       Keep(const Keep &) = delete;
       Keep &operator=(const Keep &) = delete;
 
+      // the kept forces go back now (and not again as the Keep ends)
+      void forces_back();
+      // the kept positions (valid while the Keep lives); after
+      // positions_taken() the Keep leaves the positions as they are: the
+      // caller has set each kept atom's position itself, from these
+      double **positions() const { return nodes.xkept; }
+      void positions_taken() { which = FORCES_ONLY; }
+
      private:
       NodeSampler &nodes;
       Positions which;
@@ -111,6 +119,19 @@ namespace PEJump {
     int sum_nodes(const Quadrature &rule, int first, int skip, double scale, double offset,
                   const FreeFlight &v, const AtomSet &set, int mask, double **acc, double **fend,
                   bool keep_forces = true);
+    // the same inside the caller's Keep, made with the positions
+    // positions_for(set); with onto_acc false the first node's terms
+    // replace the values in acc instead of adding to them
+    int sum_nodes_in(Keep &, const Quadrature &rule, int first, int skip, double scale,
+                     double offset, const FreeFlight &v, const AtomSet &set, int mask, double **acc,
+                     double **fend, bool onto_acc);
+    // the positions a Keep keeps for sum_nodes() over set: those that the
+    // first node moves, or all owned atoms for a group other than all
+    // without a list
+    static Positions positions_for(const AtomSet &set)
+    {
+      return (!set.list && (set.groupbit != 1)) ? ALL_OWNED : SET_ON_MOVE;
+    }
 
     // the energy and virial flags the MD step's force evaluation got
     // (pre_reverse()); whether it tallies
