@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <tuple>
 
@@ -36,51 +37,75 @@ void bonded_lattice(Sim &s)
           "velocity all create 1.0 4928459 loop geom"});
 }
 
+// runs work on a communicator of the first nranks ranks of MPI_COMM_WORLD
+// (the other ranks do nothing)
+void on_first_ranks(int nranks, const std::function<void(MPI_Comm)> &work)
+{
+  int me;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  MPI_Comm sub;
+  MPI_Comm_split(MPI_COMM_WORLD, me < nranks ? 0 : MPI_UNDEFINED, me, &sub);
+  if (sub == MPI_COMM_NULL) return;
+  work(sub);
+  MPI_Comm_free(&sub);
+}
+
+// an fcc LJ crystal in the left 3.5 of 8 lattice cells along x on a grid of
+// nranks x 1 x 1 ranks: with 2 ranks, the right one owns no atom
+std::vector<std::string> half_filled_box(int nranks)
+{
+  return {"units lj",
+          "atom_style atomic",
+          fmt::format("processors {} 1 1", nranks),
+          "lattice fcc 0.8442",
+          "region box block 0 8 0 4 0 4",
+          "create_box 1 box",
+          "region half block 0 3.5 INF INF INF INF",
+          "create_atoms 1 region half",
+          "mass 1 1.0",
+          "velocity all create 1.0 4928",
+          "pair_style lj/cut 2.5",
+          "pair_coeff 1 1 1.0 1.0 2.5"};
+}
+
 // positions and velocities after a short run on nranks ranks, ordered by the
 // atoms' initial lattice positions (create_atoms numbers atoms differently on
 // different processor grids, so atom IDs cannot be used to match atoms);
 // filled on world rank 0 only
 std::vector<double> run_on(int nranks, const std::string &fix, bool bonded)
 {
-  int me;
-  MPI_Comm_rank(MPI_COMM_WORLD, &me);
-  MPI_Comm sub;
-  MPI_Comm_split(MPI_COMM_WORLD, me < nranks ? 0 : MPI_UNDEFINED, me, &sub);
   std::vector<double> out;
-  if (sub != MPI_COMM_NULL) {
-    {
-      Sim s(sub);
-      // fix holds one or more commands separated by newlines; "newton"
-      // must precede the box, the others follow the system set-up
-      std::vector<std::string> before, after;
-      for (const auto &line : LAMMPS_NS::utils::split_lines(fix))
-        (LAMMPS_NS::utils::strmatch(line, "^newton") ? before : after).push_back(line);
-      s.cmds(before);
-      if (bonded)
-        bonded_lattice(s);
-      else
-        lj_liquid(s, 5);
-      const int n = static_cast<int>(s.lmp->atom->natoms);
-      std::vector<double> x0(3 * n), x(3 * n), v(3 * n);
-      lammps_gather_atoms(s.lmp, "x", 1, 3, x0.data());
-      s.cmds(after);
-      s.cmds({"timestep 0.005", "thermo 20", "run 200 post no"});
-      lammps_gather_atoms(s.lmp, "x", 1, 3, x.data());
-      lammps_gather_atoms(s.lmp, "v", 1, 3, v.data());
-      std::vector<int> order(n);
-      for (int i = 0; i < n; ++i) order[i] = i;
-      const auto key = [&](int i) {
-        return std::make_tuple(std::lround(1e6 * x0[3 * i]), std::lround(1e6 * x0[3 * i + 1]),
-                               std::lround(1e6 * x0[3 * i + 2]));
-      };
-      std::sort(order.begin(), order.end(), [&](int a, int b) {
-        return key(a) < key(b);
-      });
-      for (int i : order) out.insert(out.end(), &x[3 * i], &x[3 * i + 3]);
-      for (int i : order) out.insert(out.end(), &v[3 * i], &v[3 * i + 3]);
-    }
-    MPI_Comm_free(&sub);
-  }
+  on_first_ranks(nranks, [&](MPI_Comm sub) {
+    Sim s(sub);
+    // fix holds one or more commands separated by newlines; "newton"
+    // must precede the box, the others follow the system set-up
+    std::vector<std::string> before, after;
+    for (const auto &line : LAMMPS_NS::utils::split_lines(fix))
+      (LAMMPS_NS::utils::strmatch(line, "^newton") ? before : after).push_back(line);
+    s.cmds(before);
+    if (bonded)
+      bonded_lattice(s);
+    else
+      lj_liquid(s, 5);
+    const int n = static_cast<int>(s.lmp->atom->natoms);
+    std::vector<double> x0(3 * n), x(3 * n), v(3 * n);
+    lammps_gather_atoms(s.lmp, "x", 1, 3, x0.data());
+    s.cmds(after);
+    s.cmds({"timestep 0.005", "thermo 20", "run 200 post no"});
+    lammps_gather_atoms(s.lmp, "x", 1, 3, x.data());
+    lammps_gather_atoms(s.lmp, "v", 1, 3, v.data());
+    std::vector<int> order(n);
+    for (int i = 0; i < n; ++i) order[i] = i;
+    const auto key = [&](int i) {
+      return std::make_tuple(std::lround(1e6 * x0[3 * i]), std::lround(1e6 * x0[3 * i + 1]),
+                             std::lround(1e6 * x0[3 * i + 2]));
+    };
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return key(a) < key(b);
+    });
+    for (int i : order) out.insert(out.end(), &x[3 * i], &x[3 * i + 3]);
+    for (int i : order) out.insert(out.end(), &v[3 * i], &v[3 * i + 3]);
+  });
   MPI_Barrier(MPI_COMM_WORLD);
   return out;
 }
@@ -168,41 +193,21 @@ TEST(PEJumpRanks, RestartWithAnEmptyRank)
   int me;
   MPI_Comm_rank(MPI_COMM_WORLD, &me);
   std::vector<double> ke;
-  for (const int nranks : {1, 2}) {
-    MPI_Comm sub;
-    MPI_Comm_split(MPI_COMM_WORLD, me < nranks ? 0 : MPI_UNDEFINED, me, &sub);
-    if (sub == MPI_COMM_NULL) continue;
-    const std::string grid = fmt::format("processors {} 1 1", nranks);
-    const std::string file = fmt::format("pe_jump_empty_rank{}.restart", nranks);
-    Sim s(sub);
-    s.cmds({"units lj",
-            "atom_style atomic",
-            grid,
-            "lattice fcc 0.8442",
-            "region box block 0 8 0 4 0 4",
-            "create_box 1 box",
-            "region half block 0 3.5 INF INF INF INF",
-            "create_atoms 1 region half",
-            "mass 1 1.0",
-            "velocity all create 1.0 4928",
-            "pair_style lj/cut 2.5",
-            "pair_coeff 1 1 1.0 1.0 2.5",
-            "fix 1 all pe_jump",
-            "timestep 0.005",
-            "thermo 0",
-            "run 10 post no",
-            "write_restart " + file,
-            "clear",
-            grid,
-            "read_restart " + file,
-            "fix 1 all pe_jump compensate no",
-            "thermo 0",
-            "run 20 post no"});
-    ke.push_back(s.eval("ke"));
-    MPI_Barrier(sub);
-    if (me == 0) std::remove(file.c_str());
-    MPI_Comm_free(&sub);
-  }
+  for (const int nranks : {1, 2})
+    on_first_ranks(nranks, [&](MPI_Comm sub) {
+      const std::string file = fmt::format("pe_jump_empty_rank{}.restart", nranks);
+      {
+        Sim s(sub);
+        s.cmds(half_filled_box(nranks));
+        s.cmds({"fix 1 all pe_jump", "timestep 0.005", "thermo 0", "run 10 post no",
+                "write_restart " + file, "clear", fmt::format("processors {} 1 1", nranks),
+                "read_restart " + file, "fix 1 all pe_jump compensate no", "thermo 0",
+                "run 20 post no"});
+        ke.push_back(s.eval("ke"));
+      }
+      MPI_Barrier(sub);
+      if (me == 0) std::remove(file.c_str());
+    });
   if (me == 0) {
     ASSERT_EQ(ke.size(), 2u);
     EXPECT_NEAR(ke[1], ke[0], 1e-12 * ke[0]);
@@ -218,20 +223,14 @@ TEST(PEJumpRanks, AutoQuadratureWithAnEmptyRank)
   int me;
   MPI_Comm_rank(MPI_COMM_WORLD, &me);
   std::vector<double> ke;
-  for (const int nranks : {1, 2}) {
-    MPI_Comm sub;
-    MPI_Comm_split(MPI_COMM_WORLD, me < nranks ? 0 : MPI_UNDEFINED, me, &sub);
-    if (sub == MPI_COMM_NULL) continue;
-    Sim s(sub);
-    s.cmds({"units lj", "atom_style atomic", fmt::format("processors {} 1 1", nranks),
-            "lattice fcc 0.8442", "region box block 0 8 0 4 0 4", "create_box 1 box",
-            "region half block 0 3.5 INF INF INF INF", "create_atoms 1 region half", "mass 1 1.0",
-            "velocity all create 1.0 4928", "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5",
-            "fix 1 all pe_jump quadrature auto 1e-8", "timestep 0.005", "thermo 0",
-            "run 20 post no"});
-    ke.push_back(s.eval("ke"));
-    MPI_Comm_free(&sub);
-  }
+  for (const int nranks : {1, 2})
+    on_first_ranks(nranks, [&](MPI_Comm sub) {
+      Sim s(sub);
+      s.cmds(half_filled_box(nranks));
+      s.cmds({"fix 1 all pe_jump quadrature auto 1e-8", "timestep 0.005", "thermo 0",
+              "run 20 post no"});
+      ke.push_back(s.eval("ke"));
+    });
   if (me == 0) {
     ASSERT_EQ(ke.size(), 2u);
     EXPECT_NEAR(ke[1], ke[0], 1e-12 * ke[0]);
