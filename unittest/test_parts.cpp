@@ -1,14 +1,16 @@
 // unit tests of parts of the fixes that need a LAMMPS instance but no run:
 // the per-atom state table (values kept through growth, copies, exchange
 // and restart packing, new atoms at their init values, memory count), the
-// other fixes that the integrators watch for velocity changes, and the
-// stability guard's bound on how far atoms moved since the list build
+// other fixes that the integrators watch for velocity changes, the
+// stability guard's bound on how far atoms moved since the list build, and
+// the node sampler's guard of positions and forces
 
 #include "neighbor.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_other_fixes.h"
+#include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_systems.h"
 
@@ -21,6 +23,7 @@
 using namespace PEJumpTest;
 using LAMMPS_NS::PEJump::AtomState;
 using LAMMPS_NS::PEJump::ForceSampler;
+using LAMMPS_NS::PEJump::NodeSampler;
 using LAMMPS_NS::PEJump::OtherFixes;
 using LAMMPS_NS::PEJump::StabilityGuard;
 
@@ -205,4 +208,85 @@ TEST(StabilityGuard, ExcursionSinceGivesTheVerdictOfTheMeasure)
     guard.step(h);
     EXPECT_GT(guard.excursion_since(all, flight, xhold, 0.0, h), 0.0);
   }
+}
+
+/* ----------------------------------------------------------------------
+   a node sum inside the caller's Keep (pe_jump/async's coarse node): the
+   sum of the first node replaces what the accumulator held, and equals the
+   sum of a node sum with its own Keep onto zeros; forces_back() puts the
+   forces back at once and not again as the Keep ends; after
+   positions_taken() the Keep leaves the positions the caller set (from the
+   kept ones) and puts nothing back
+------------------------------------------------------------------------- */
+
+TEST(NodeSampler, SumInTheCallersKeep)
+{
+  Sim s;
+  lj_liquid(s, 3);
+  s.cmds({"run 0 post no"});
+  auto *atom = s.lmp->atom;
+  const int n = atom->nlocal;
+  ASSERT_GT(n, 10);
+  std::vector<double> x0(3 * n), f0(3 * n), vbuf(3 * n), jbuf(3 * n, 0.0);
+  std::vector<double> with_own(3 * n, 0.0), in_callers(3 * n, 7.0);
+  std::vector<double *> vrow(n), jrow(n), own_row(n), callers_row(n);
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      x0[3 * i + k] = atom->x[i][k];
+      f0[3 * i + k] = atom->f[i][k];
+      vbuf[3 * i + k] = atom->v[i][k];
+    }
+    vrow[i] = &vbuf[3 * i];
+    jrow[i] = &jbuf[3 * i];
+    own_row[i] = &with_own[3 * i];
+    callers_row[i] = &in_callers[3 * i];
+  }
+  std::vector<int> listed;
+  for (int i = 0; i < n; i += 2) listed.push_back(i);
+  const LAMMPS_NS::PEJump::FreeFlight flight{vrow.data(), jrow.data(), nullptr, false};
+  const LAMMPS_NS::PEJump::AtomSet set{1, &listed};
+  const LAMMPS_NS::PEJump::Quadrature rule(LAMMPS_NS::PEJump::Quadrature::LEGENDRE, 2);
+  const double h = 0.01;
+  ForceSampler forces(s.lmp);
+  NodeSampler nodes(s.lmp, &forces);
+  const auto same_as_start = [&](double **a, const std::vector<double> &start, const char *what) {
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(a[i][k], start[3 * i + k]) << what << " of atom " << i;
+  };
+
+  EXPECT_EQ(
+      nodes.sum_nodes(rule, 0, -1, h, 0.0, flight, set, ForceSampler::ALL, own_row.data(), nullptr),
+      2);
+  same_as_start(atom->x, x0, "position");
+  same_as_start(atom->f, f0, "force");
+
+  {
+    NodeSampler::Keep keep(nodes, NodeSampler::positions_for(set), set.list);
+    EXPECT_EQ(nodes.sum_nodes_in(keep, rule, 0, -1, h, 0.0, flight, set, ForceSampler::ALL,
+                                 callers_row.data(), nullptr, false),
+              2);
+    keep.forces_back();
+    same_as_start(atom->f, f0, "force put back");
+    atom->f[1][0] = 12345.0;    // not to be put back again
+    double **kept = keep.positions();
+    for (const int i : listed)
+      for (int k = 0; k < 3; ++k) atom->x[i][k] = kept[i][k] + 1.0;
+    keep.positions_taken();
+  }
+  EXPECT_EQ(atom->f[1][0], 12345.0);
+  for (int i = 0; i < n; ++i) {
+    const double moved = (i % 2 == 0) ? 1.0 : 0.0;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(atom->x[i][k], x0[3 * i + k] + moved) << "atom " << i;
+      if (i % 2 == 0)
+        EXPECT_EQ(in_callers[3 * i + k], with_own[3 * i + k]) << "atom " << i;
+      else
+        EXPECT_EQ(in_callers[3 * i + k], 7.0) << "unlisted atom " << i;
+    }
+  }
+  // the sums are the forces at the nodes: not the start's
+  double change = 0.0;
+  for (const int i : listed)
+    for (int k = 0; k < 3; ++k) change += fabs(with_own[3 * i + k] - f0[3 * i + k]);
+  EXPECT_GT(change, 1e-6);
 }
