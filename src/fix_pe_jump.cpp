@@ -583,8 +583,7 @@ void FixPEJump::final_integrate()
   opened_ahead = may_open_ahead();
   if (opened_ahead)
     scheme->jump_loop(group_atoms(), favg,
-                      {h_step, rest, rule->node[rule->primary()] * update->dt, nullptr, false},
-                      mag);
+                      {h_step, rest, rule->node[rule->primary()] * update->dt, false}, mag);
   else
     finish_step(favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
@@ -629,7 +628,7 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
   // the smooth jump h a and multiplies the alternating one by -(1 - beta)
   const double beta = damping->beta(h_step);
   if (!centre_kick && !end_kick && (beta == 0.0) && !fhist) {
-    scheme->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, nullptr, fingerprint}, mag);
+    scheme->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, fingerprint}, mag);
     return;
   }
   double vv = mag[0], jj = mag[1];

@@ -1210,16 +1210,16 @@ void FixPEJumpAsync::fine_quadrature_sum()
 /* ----------------------------------------------------------------------
    true if anything may read atom->f between this fine step's end and the
    force clearing of the next step: the coarse evaluation of the last fine
-   step, output and fixes at the end of the step, other time integrators
-   (after this fix), fixes that act between the steps, a run that a
-   timeout may end here (the next run may start with pre no). Elsewhere
-   the node evaluations inside the step need not put the forces of the
-   step end back
+   step, output and fixes at the end of the step, fixes that act between
+   the steps, a run that a timeout may end here (the next run may start
+   with pre no). Elsewhere the node evaluations inside the step need not
+   put the forces of the step end back. (There is no other time
+   integrator to read them: refuse_other_fixes())
 ------------------------------------------------------------------------- */
 
 bool FixPEJumpAsync::step_forces_read() const
 {
-  return clocks->last_fine_step() || others->step_observed() || others->integrate_others() ||
+  return clocks->last_fine_step() || others->step_observed() ||
       watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) || timer->has_timeout();
 }
 
@@ -1261,10 +1261,9 @@ void FixPEJumpAsync::coarse_node(double **favg, double mag[2][2])
   // the fine evaluation left forces on the atoms that move on fine steps
   // only (no fix adds forces, refuse_other_fixes()), unless atoms outside
   // the group take part
-  if (igroup == 0) nodes->zero_forces_but(&assign->moving_atoms);
   const PEJump::AtomSet slow = group_atoms(&assign->slow_atoms);
-  NodeSampler::Keep keep(*nodes, NodeSampler::positions_for(slow), slow.list);
-  nodes->zero_forces_but(nullptr);
+  NodeSampler::Keep keep(*nodes, NodeSampler::positions_for(slow), slow.list, true,
+                         (igroup == 0) ? &assign->moving_atoms : nullptr);
   coarse_quadrature_sum(keep, slow);
   keep.forces_back();
   reach_coarse_node(favg, mag, keep.positions());
@@ -1428,8 +1427,8 @@ void FixPEJumpAsync::continue_fine_step(double **favg, double *mag)
   const double ahead = opened_ahead ? rule->node[rule->primary()] * update->dt : -1.0;
   const bool fingerprint =
       watch(opened_ahead ? OtherFixes::INSIDE_STEP : OtherFixes::BETWEEN_STEPS);
-  scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
-                    {h_step, rest, ahead, nullptr, fingerprint}, mag);
+  scheme->jump_loop(group_atoms(&assign->fast_atoms), favg, {h_step, rest, ahead, fingerprint},
+                    mag);
   // the interior slow atoms get no fine forces: the fix refuses fixes that
   // add forces (refuse_other_fixes(); fix enforce2d, the only other one
   // allowed, zeroes a zero component). A Lobatto rule's next start node

@@ -36,9 +36,8 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 NodeSampler::NodeSampler(LAMMPS *lmp, ForceSampler *forces) :
-    Pointers(lmp), sampler(forces), nonzero_forces(nullptr), xkept(nullptr), fkept(nullptr),
-    nkept(0), keeping(false), keep_on_move(false), shift_time(false), ghosts_away(false),
-    eflag_step(0), vflag_step(0)
+    Pointers(lmp), sampler(forces), xkept(nullptr), fkept(nullptr), nkept(0), keeping(false),
+    keep_on_move(false), shift_time(false), ghosts_away(false), eflag_step(0), vflag_step(0)
 {
 }
 
@@ -69,10 +68,10 @@ void NodeSampler::make_room()
 ------------------------------------------------------------------------- */
 
 NodeSampler::Keep::Keep(NodeSampler &sampler, Positions positions, const AtomList *atoms,
-                        bool keep_forces) :
+                        bool keep_forces, const AtomList *nonzero_forces) :
     nodes(sampler),
     which(positions), list(atoms), forces(keep_forces), touched(sampler.sampler->touches()),
-    nonzero(sampler.nonzero_forces)
+    nonzero(nonzero_forces)
 {
   if (nodes.keeping) nodes.error->one(FLERR, "Fix pe_jump: nested NodeSampler::Keep (bug)");
   nodes.keeping = true;

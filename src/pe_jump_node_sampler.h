@@ -74,8 +74,12 @@ namespace PEJump {
     enum Positions { FORCES_ONLY, ALL_OWNED, LISTED, SET_ON_MOVE };
     class Keep {
      public:
-      // forces: false if the caller does not need the forces afterwards
-      Keep(NodeSampler &, Positions = FORCES_ONLY, const AtomList * = nullptr, bool forces = true);
+      // forces: false if the caller does not need the forces afterwards;
+      // nonzero: if given, the owned atoms but those listed have zero
+      // forces, so that only theirs are kept and zeros put back for the
+      // others
+      Keep(NodeSampler &, Positions = FORCES_ONLY, const AtomList * = nullptr, bool forces = true,
+           const AtomList *nonzero = nullptr);
       ~Keep();
       Keep(const Keep &) = delete;
       Keep &operator=(const Keep &) = delete;
@@ -97,11 +101,6 @@ namespace PEJump {
       const AtomList *nonzero;                 // the others' forces are zero
       void copy_forces(double **from, double **to) const;
     };
-
-    // the owned atoms but those listed have zero forces (nullptr: unknown):
-    // a Keep then keeps the forces of those listed and puts zeros back for
-    // the others
-    void zero_forces_but(const AtomList *atoms) { nonzero_forces = atoms; }
 
     // move the atoms of set to x + shift v and compute the contributions in
     // mask there (forces only); needs a Keep with their positions. If the
@@ -185,7 +184,6 @@ namespace PEJump {
 
    private:
     ForceSampler *sampler;
-    const AtomList *nonzero_forces;
     double **xkept, **fkept;
     int nkept;    // room for this many owned atoms
     bool keeping;

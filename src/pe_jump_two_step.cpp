@@ -185,31 +185,27 @@ void TwoStep::jump_loop(const AtomSet &set, double **favg, const Loop &step, dou
   // the options are fixed for the whole loop: one instance each, so that
   // the inner loop carries no tests (it is the fine steps' per-atom cost)
   const bool ahead = step.ahead >= 0.0;
-  const bool sample = step.fsample != nullptr;
-  if (ahead && !sample && !step.fingerprint)
-    jump_loop_as<true, false, false>(set, favg, step, mag);
-  else if (!ahead && !sample && !step.fingerprint)
-    jump_loop_as<false, false, false>(set, favg, step, mag);
-  else if (!ahead && !sample)
-    jump_loop_as<false, false, true>(set, favg, step, mag);
+  if (ahead && !step.fingerprint)
+    jump_loop_as<true, false>(set, favg, step, mag);
+  else if (!ahead && !step.fingerprint)
+    jump_loop_as<false, false>(set, favg, step, mag);
+  else if (!ahead)
+    jump_loop_as<false, true>(set, favg, step, mag);
   else
-    jump_loop_as<true, true, true>(set, favg, step, mag);
+    jump_loop_as<true, true>(set, favg, step, mag);
 }
 
 /* ----------------------------------------------------------------------
-   AHEAD: the next step begins (step.ahead >= 0), SAMPLE: start-node forces
-   are taken (step.fsample), SIGN: fingerprints; each only tested at run
-   time where the instance does not fix it
+   AHEAD: the next step begins (step.ahead >= 0), SIGN: fingerprints; each
+   only tested at run time where the instance does not fix it
 ------------------------------------------------------------------------- */
 
-template <bool AHEAD, bool SAMPLE, bool SIGN>
+template <bool AHEAD, bool SIGN>
 void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, double *mag) const
 {
   double **x = atom->x;
   double **v = atom->v;
   double **jmp_all = jump();
-  double **fstart = (SAMPLE && step.fsample) ? this->fstart() : nullptr;
-  double **fsample = step.fsample;
   double *sig = (SIGN && step.fingerprint) ? vsig() : nullptr;
   const bool ahead = !AHEAD || (step.ahead >= 0.0);
   const double *rmass = atom->rmass;
@@ -240,8 +236,6 @@ void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, 
       vi[k] = vh[k];
       ji[k] = jmp[k];
     }
-    if (SAMPLE && fstart)
-      for (int k = 0; k < 3; k++) fstart[i][k] = fsample[i][k];
     // (no fingerprint when a step begins ahead: nothing may change v then)
     if (SIGN && sig) sig[i] = velocity_fingerprint(vi);
     vv = MAX(vv, vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);

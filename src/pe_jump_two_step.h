@@ -118,13 +118,11 @@ namespace PEJump {
     const double *inverse_masses() const { return inverse_mass.data(); }    // per type
 
     // the atoms of set jump with favg over the step h and move on by rest
-    // (from the primary node to the step end); fstart gets the start-node
-    // forces of the next step from fsample (if has start nodes and
-    // fsample); fingerprints if asked; with ahead >= 0 the next step
-    // begins and moves by ahead in the same pass, with the same operations
+    // (from the primary node to the step end); fingerprints if asked; with
+    // ahead >= 0 the next step begins and moves by ahead in the same pass,
+    // with the same operations
     struct Loop {
       double h, rest, ahead;
-      double **fsample;
       bool fingerprint;
     };
     void jump_loop(const AtomSet &, double **favg, const Loop &, double *mag) const;
@@ -144,7 +142,7 @@ namespace PEJump {
     void forget_energies() { cached_step = -1; }
 
    private:
-    template <bool AHEAD, bool SAMPLE, bool SIGN>
+    template <bool AHEAD, bool SIGN>
     void jump_loop_as(const AtomSet &, double **favg, const Loop &, double *mag) const;
     AtomState &state;
     int JUMP, VSIG, FSTART;
