@@ -196,14 +196,17 @@ void InteractionSplit::build()
   // perpetual neighbor lists requested by pair styles (one for a plain pair
   // style, one per sub-style for pair hybrid)
 
-  pairs.clear();
+  // the subsets of the last build are refilled (their storage is kept)
+  size_t npairs = 0;
   cross.clear();
   for (int n = 0; n < neighbor->nlist; n++) {
     NeighList *list = neighbor->lists[n];
     if (!list || list->occasional || (list->requestor_type != NeighList::PAIR)) continue;
-    pairs.push_back({list, 0, nullptr, nullptr, nullptr, {}});
-    split_pairs(pairs.back());
+    if (pairs.size() <= npairs) pairs.emplace_back();
+    pairs[npairs].list = list;
+    split_pairs(pairs[npairs++]);
   }
+  pairs.resize(npairs);
 
   double local[3] = {0.0, 0.0, 0.0};    // interactions: fine, coarse, all
   for (const auto &p : pairs)
@@ -242,13 +245,6 @@ void InteractionSplit::split_pairs(PairList &p)
   const int inum = list->inum;
   const int *ilist = list->ilist;
 
-  for (auto &part : p.part) {
-    part.ilist.clear();
-    part.numneigh.assign(nall, 0);
-    part.firstneigh.assign(nall, nullptr);
-    part.neigh.clear();
-  }
-
   // per atom (owned and ghost) 1 if on the fine clock, 2 if on the coarse
   // clock, 0 if not integrated: a pair is FINE if either atom is fine
   const int *mask = atom->mask;
@@ -256,38 +252,59 @@ void InteractionSplit::split_pairs(PairList &p)
   for (int i = 0; i < nall; i++)
     clock_of[i] = !(mask[i] & groupbit) ? 0 : ((mask[i] & finebit) ? 1 : 2);
   const int *clock = clock_of.data();
-  const auto pair_class = [clock](int i, int j) {
-    return ((clock[i] == 1) || (clock[j] == 1)) ? FINE : COARSE;
-  };
 
-  // first pass: sizes, so that the neighbor storage is not reallocated later
-
-  size_t total[2] = {0, 0};
-  for (int ii = 0; ii < inum; ii++) {
-    const int i = ilist[ii];
-    const int *jlist = list->firstneigh[i];
-    for (int jj = 0; jj < list->numneigh[i]; jj++) ++total[pair_class(i, jlist[jj] & NEIGHMASK)];
+  // one buffer for both subsets: the FINE neighbors of the atoms in list
+  // order from its front, the COARSE ones from its back (each atom's in
+  // list order), so that it is sized once and filled in one pass
+  size_t total = 0;
+  for (int ii = 0; ii < inum; ii++) total += list->numneigh[ilist[ii]];
+  p.neigh.resize(total);
+  int *front = p.neigh.data();
+  int *back = front + total;
+  for (auto &part : p.part) {
+    part.ilist.clear();
+    part.numneigh.assign(nall, 0);
+    part.firstneigh.assign(nall, nullptr);
   }
-  for (int s = 0; s < 2; s++) p.part[s].neigh.reserve(total[s]);
+  PairSubset &fine = p.part[FINE], &coarse = p.part[COARSE];
 
   for (int ii = 0; ii < inum; ii++) {
     const int i = ilist[ii];
     const int *jlist = list->firstneigh[i];
-    size_t start[2] = {p.part[FINE].neigh.size(), p.part[COARSE].neigh.size()};
-    for (int jj = 0; jj < list->numneigh[i]; jj++) {
-      const int j = jlist[jj] & NEIGHMASK;
-      const int s = pair_class(i, j);
-      p.part[s].neigh.push_back(jlist[jj]);
-      if ((s == FINE) && ((clock[i] == 2) || (clock[j] == 2))) {
+    const int n = list->numneigh[i];
+    int nfine = n;
+    if (clock[i] != 1) {
+      nfine = 0;
+      for (int jj = 0; jj < n; jj++) nfine += (clock[jlist[jj] & NEIGHMASK] == 1);
+    }
+    int *coarse_at = back - (n - nfine);
+    if (nfine == n) {
+      std::copy(jlist, jlist + n, front);
+    } else if (nfine == 0) {
+      std::copy(jlist, jlist + n, coarse_at);
+    } else {
+      int *f = front, *c = coarse_at;
+      for (int jj = 0; jj < n; jj++) *((clock[jlist[jj] & NEIGHMASK] == 1) ? f++ : c++) = jlist[jj];
+    }
+    // FINE pairs of a fine and a coarse atom
+    for (int jj = 0; jj < nfine; jj++) {
+      const int j = front[jj] & NEIGHMASK;
+      if ((clock[i] == 2) || (clock[j] == 2)) {
         cross.push_back(i);
         cross.push_back(j);
       }
     }
-    for (int s = 0; s < 2; s++) {
-      auto &part = p.part[s];
-      part.numneigh[i] = static_cast<int>(part.neigh.size() - start[s]);
-      part.firstneigh[i] = part.neigh.data() + start[s];
-      if (part.numneigh[i] > 0) part.ilist.push_back(i);
+    if (nfine > 0) {
+      fine.ilist.push_back(i);
+      fine.numneigh[i] = nfine;
+      fine.firstneigh[i] = front;
+      front += nfine;
+    }
+    if (nfine < n) {
+      coarse.ilist.push_back(i);
+      coarse.numneigh[i] = n - nfine;
+      coarse.firstneigh[i] = coarse_at;
+      back = coarse_at;
     }
   }
 }

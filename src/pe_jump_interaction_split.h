@@ -120,16 +120,16 @@ namespace PEJump {
     struct PairSubset {
       std::vector<int> ilist;    // the atoms with neighbors in the subset
       std::vector<int> numneigh;
-      std::vector<int *> firstneigh;
-      std::vector<int> neigh;
+      std::vector<int *> firstneigh;    // into PairList::neigh
     };
     struct PairList {
-      NeighList *list;
-      int inum;
-      int *ilist;
-      int *numneigh;
-      int **firstneigh;
+      NeighList *list = nullptr;
+      int inum = 0;
+      int *ilist = nullptr;
+      int *numneigh = nullptr;
+      int **firstneigh = nullptr;
       PairSubset part[2];
+      std::vector<int> neigh;    // the neighbors of both subsets
     };
     std::vector<PairList> pairs;
     std::vector<std::pair<int, int>> probe_pairs(const NeighList *) const;    // (i, jj)
