@@ -315,21 +315,29 @@ void InteractionSplit::split_topology(TopoList &t)
 {
   t.nfull = *t.count;
   t.full = *t.list;
-  const int width = t.natoms + 1;    // atoms and type
-  coarse_entries.clear();
   t.nfine = 0;
-  for (int n = 0; n < t.nfull; n++) {
-    int *entry = t.full[n];
-    if (klass(entry, t.natoms) == COARSE) {
-      coarse_entries.insert(coarse_entries.end(), entry, entry + width);
-    } else {
-      if (t.nfine != n) std::copy(entry, entry + width, t.full[t.nfine]);
-      ++t.nfine;
-    }
+  if (t.nfull == 0) return;
+  const int width = t.natoms + 1;    // atoms and type
+  int *rows = t.full[0];             // the entries are one array (see TopoList)
+  const auto fine = [&](int n) {
+    return klass(rows + n * width, t.natoms) == FINE;
+  };
+
+  // a stable partition: the coarse entries behind the last fine one stay
+  // where they are, the others move in runs
+  int last = t.nfull - 1;
+  while ((last >= 0) && !fine(last)) --last;
+  coarse_entries.clear();
+  for (int n = 0; n <= last;) {
+    int m = n;
+    while ((m <= last) && fine(m)) ++m;
+    if (t.nfine != n) std::copy(rows + n * width, rows + m * width, rows + t.nfine * width);
+    t.nfine += m - n;
+    for (n = m; (m <= last) && !fine(m);) ++m;
+    coarse_entries.insert(coarse_entries.end(), rows + n * width, rows + m * width);
+    n = m;
   }
-  for (int n = t.nfine; n < t.nfull; n++)
-    std::copy(&coarse_entries[(n - t.nfine) * width], &coarse_entries[(n - t.nfine + 1) * width],
-              t.full[n]);
+  std::copy(coarse_entries.begin(), coarse_entries.end(), rows + t.nfine * width);
 }
 
 /* ---------------------------------------------------------------------- */
