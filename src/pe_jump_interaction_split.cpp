@@ -138,20 +138,6 @@ int InteractionSplit::coarse(int i) const
   return (m & groupbit) && !(m & finebit);
 }
 
-/* ----------------------------------------------------------------------
-   FINE if any of the atoms is on the fine clock, else COARSE
-------------------------------------------------------------------------- */
-
-int InteractionSplit::klass(const int *atoms, int n) const
-{
-  const int *mask = atom->mask;
-  for (int k = 0; k < n; k++) {
-    const int m = mask[atoms[k]];
-    if ((m & groupbit) && (m & finebit)) return FINE;
-  }
-  return COARSE;
-}
-
 /* ---------------------------------------------------------------------- */
 
 bool InteractionSplit::up_to_date() const
@@ -319,21 +305,27 @@ void InteractionSplit::split_topology(TopoList &t)
   if (t.nfull == 0) return;
   const int width = t.natoms + 1;    // atoms and type
   int *rows = t.full[0];             // the entries are one array (see TopoList)
-  const auto fine = [&](int n) {
-    return klass(rows + n * width, t.natoms) == FINE;
+  // FINE if any of the atoms of entry n is on the fine clock
+  const int *mask = atom->mask;
+  const int bits = groupbit | finebit;
+  const auto is_fine = [&](int n) {
+    const int *entry = rows + n * width;
+    for (int k = 0; k < t.natoms; k++)
+      if ((mask[entry[k]] & bits) == bits) return true;
+    return false;
   };
 
   // a stable partition: the coarse entries behind the last fine one stay
   // where they are, the others move in runs
   int last = t.nfull - 1;
-  while ((last >= 0) && !fine(last)) --last;
+  while ((last >= 0) && !is_fine(last)) --last;
   coarse_entries.clear();
   for (int n = 0; n <= last;) {
     int m = n;
-    while ((m <= last) && fine(m)) ++m;
+    while ((m <= last) && is_fine(m)) ++m;
     if (t.nfine != n) std::copy(rows + n * width, rows + m * width, rows + t.nfine * width);
     t.nfine += m - n;
-    for (n = m; (m <= last) && !fine(m);) ++m;
+    for (n = m; (m <= last) && !is_fine(m);) ++m;
     coarse_entries.insert(coarse_entries.end(), rows + n * width, rows + m * width);
     n = m;
   }

@@ -156,7 +156,6 @@ namespace PEJump {
     std::vector<int> coarse_entries;    // work: entries moved behind the fine ones
     TopoList topo[4];
 
-    int klass(const int *atoms, int n) const;
     void mark_fine(std::vector<int> &flag, bool acting, double reach = 0.0) const;
     // closer than the pair style's cutoff, and than reach if > 0
     bool within_cutoff(int i, int j, double reach = 0.0) const;    // needs a pair style
