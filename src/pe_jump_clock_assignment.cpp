@@ -230,7 +230,11 @@ bool ClockAssignment::due(const std::vector<int> *chosen, bigint node, int steps
   const bool evaluate = criterion && (updates(node) != updates(node - steps));
   if (evaluate) {
     // as LAMMPS' own update at the end of step node would: a criterion
-    // that reads the step or the time (a moving region) sees the node's
+    // that reads the step or the time (a moving region) sees the node's,
+    // one that reads the neighbors of an atom (coord/atom) sees the ghost
+    // atoms at the node too (unless the node was written, they are still
+    // where the last fine step's force evaluation left them)
+    comm->forward_comm();
     const bigint next = update->ntimestep;
     update->ntimestep = node;
     criterion->setup(0);

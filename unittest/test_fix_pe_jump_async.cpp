@@ -1546,6 +1546,31 @@ TEST(PEJumpAsync, ClocksFollowADynamicGroupAsOftenAsItIsUpdated)
 }
 
 /* ----------------------------------------------------------------------
+   a criterion that reads the neighbors of an atom (its coordination) is
+   evaluated at the coarse node with every atom there, ghost atoms too:
+   the clocks and so the trajectory are the same whether or not output at
+   the nodes brought the ghost atoms there (the periodic images of the
+   one-rank box were still at the last fine step's primary node when
+   nothing was written: 1e-3 apart after 100 steps)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, NeighborCriterionSeesTheGhostAtomsAtTheNode)
+{
+  std::vector<double> x[2];
+  for (const int written : {0, 1}) {
+    Sim s;
+    lj_liquid(s, 4);
+    s.cmds({"compute crd all coord/atom cutoff 1.3", "variable few atom c_crd<11",
+            "group fast dynamic all var few every 5", "fix 1 all pe_jump/async 5 fast",
+            written ? "thermo 5" : "thermo 0", "run 100"});
+    x[written] = unwrapped_positions(s);
+    EXPECT_GT(s.vec("1", 7) + s.vec("1", 8), 20.0);    // atoms on the fine clock
+  }
+  // thermo output makes its steps tally energies: round-off only
+  EXPECT_LT(max_diff(x[0], x[1]), 1e-10);
+}
+
+/* ----------------------------------------------------------------------
    a run continued from a restart file written at a coarse node, with the
    region moving on, gives the unbroken run's trajectory: the fine clock
    (a group of the fix) and the clocks' state are in the restart file

@@ -161,7 +161,12 @@ TEST(PEJumpRanks, LJLiquidSameOn1And2And4Ranks)
                // without energy output (4.3e-3 apart on 4 ranks when they
                // were taken with ghost atoms still at the step's midpoint)
                "region rr sphere 4 4 4 2.5 units box\ngroup dg dynamic all region rr every 5\n"
-               "fix 1 all pe_jump/async 5 dg buffer 1"},
+               "fix 1 all pe_jump/async 5 dg buffer 1",
+               // a criterion that reads the neighbors, evaluated at coarse
+               // nodes (differed in the fourth digit of pe after 50 steps
+               // when the ghost atoms were not brought to the node)
+               "compute crd all coord/atom cutoff 1.3\nvariable few atom c_crd<11\n"
+               "group dg dynamic all var few every 5\nfix 1 all pe_jump/async 5 dg"},
               false, 500, 5.0 * std::cbrt(4.0 / 0.8442));
 }
 
