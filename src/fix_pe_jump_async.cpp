@@ -1327,6 +1327,7 @@ void FixPEJumpAsync::final_integrate()
   // at_step_end() has brought the ghosts to the node
   if (coarse_end && (nodes->step_tallies() || others->step_observed()))
     classes->label(*split, *assign, groupbit);
+  if (coarse_end) assign->evaluate_at_node(update->ntimestep, clocks->steps());
 }
 
 /* ----------------------------------------------------------------------

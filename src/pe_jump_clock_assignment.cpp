@@ -209,38 +209,52 @@ void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *ch
 }
 
 /* ----------------------------------------------------------------------
+   true if LAMMPS updated the dynamic fast group (every nevery steps) in
+   the coarse step that ends at step node (steps fine steps)
+------------------------------------------------------------------------- */
+
+bool ClockAssignment::updated_in(bigint node, int steps) const
+{
+  if (!dynamic) return false;
+  const bigint every = modify->get_fix_by_id("GROUP_" + fast_group)->nevery;
+  const auto updates = [every](bigint step) {    // updates of the group up to step
+    return (step >= 0) ? step / every : -((every - 1 - step) / every);
+  };
+  return updates(node) != updates(node - steps);
+}
+
+/* ----------------------------------------------------------------------
+   at the end of the coarse step that ends at step node, every atom at its
+   node: a dynamic fast group updated in that coarse step is evaluated
+   again, as LAMMPS' own update at the end of a step of fix nve would see
+   it. LAMMPS' own updates, during the force computation, see the atoms
+   inside a step, and the per-atom energies of the fine interactions only.
+   Here the criterion sees the positions (ghost atoms' too: unless the node
+   is written, they are still where the last fine step's force evaluation
+   left them), velocities, time and (on steps that tally them, where the
+   fix evaluates everything at the node) per-atom energies of the node;
+   output at the node shows this group, and the clocks follow it
+------------------------------------------------------------------------- */
+
+void ClockAssignment::evaluate_at_node(bigint node, int steps)
+{
+  if (!updated_in(node, steps)) return;
+  comm->forward_comm();
+  modify->get_fix_by_id("GROUP_" + fast_group)->setup(0);
+}
+
+/* ----------------------------------------------------------------------
    at the coarse node of step node (the one before it steps earlier): true
-   if a dynamic fast group or the atoms chosen by the fix differ from those
-   of the last assignment (global). The group's criterion is evaluated
-   again at the node positions at the first coarse node after each of the
-   group's own updates (every nevery steps), so that the clocks follow
-   the group as often as it is updated; the group's own updates, in the
-   middle of a step, see atoms between their nodes
+   if a dynamic fast group updated in the coarse step (and evaluated at
+   its end, evaluate_at_node()) or the atoms chosen by the fix differ from
+   those of the last assignment (global)
 ------------------------------------------------------------------------- */
 
 bool ClockAssignment::due(const std::vector<int> *chosen, bigint node, int steps)
 {
   if (!dynamic && !automatic) return false;
   ++tally[NODES];
-  Fix *criterion = dynamic ? modify->get_fix_by_id("GROUP_" + fast_group) : nullptr;
-  const auto updates = [&](bigint step) {    // updates of the group up to step
-    const bigint every = criterion->nevery;
-    return (step >= 0) ? step / every : -((every - 1 - step) / every);
-  };
-  const bool evaluate = criterion && (updates(node) != updates(node - steps));
-  if (evaluate) {
-    // as LAMMPS' own update at the end of step node would: a criterion
-    // that reads the step or the time (a moving region) sees the node's,
-    // one that reads the neighbors of an atom (coord/atom) sees the ghost
-    // atoms at the node too (unless the node was written, they are still
-    // where the last fine step's force evaluation left them)
-    comm->forward_comm();
-    const bigint next = update->ntimestep;
-    update->ntimestep = node;
-    criterion->setup(0);
-    update->ntimestep = next;
-  }
-  if (!evaluate && !automatic) return false;
+  if (!updated_in(node, steps) && !automatic) return false;
   double now[2];
   fast_signature(now, chosen);
   return (now[0] != fast_seen[0]) || (now[1] != fast_seen[1]);

@@ -57,12 +57,14 @@ namespace PEJump {
     // group has atoms off the fine clock (redefined); true if done
     bool assign_buffer(bool started, InteractionSplit &);
     // a dynamic fast group, or atoms chosen by the fix (chosen[i] = 1,
-    // owned atoms; nullptr: none): at the coarse node of step node (steps
-    // after the one before), due() tells if they changed (global; evaluates
-    // the group's criterion after its updates), then follow() takes them
-    // (and the buffer) on the fine clock; to_fine[i] (owned atoms) is 1 for
-    // an atom that went to the fine clock, -1 to the coarse clock, 0 else.
-    // True if any atom changed clock (global)
+    // owned atoms; nullptr: none): at the end of the coarse step that ends
+    // at step node (steps fine steps), evaluate_at_node() evaluates the
+    // group's criterion again after its updates; at the coarse node, due()
+    // tells if they changed (global), then follow() takes them (and the
+    // buffer) on the fine clock; to_fine[i] (owned atoms) is 1 for an atom
+    // that went to the fine clock, -1 to the coarse clock, 0 else. True if
+    // any atom changed clock (global)
+    void evaluate_at_node(bigint node, int steps);
     bool due(const std::vector<int> *chosen, bigint node, int steps);
     bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
     bool follows_group() const { return dynamic || automatic; }
@@ -129,6 +131,7 @@ namespace PEJump {
     std::vector<int> *reverse_flags;    // reverse communication carries these flags
     bool own_group() const;
     void assign(InteractionSplit &, const std::vector<int> *chosen = nullptr);
+    bool updated_in(bigint node, int steps) const;    // the group updated in the coarse step
     void fast_signature(double *, const std::vector<int> *chosen) const;
     bigint fast_off_clock() const;
   };

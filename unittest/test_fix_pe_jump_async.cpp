@@ -1571,6 +1571,31 @@ TEST(PEJumpAsync, NeighborCriterionSeesTheGhostAtomsAtTheNode)
 }
 
 /* ----------------------------------------------------------------------
+   the dynamic fast group as output at the coarse nodes where it is
+   updated is its criterion at the node (as with fix nve), also for a
+   criterion of per-atom energies, which the force evaluation inside a
+   step tallies for the fine interactions only. LAMMPS' own update, during
+   the step, counted 864 of 864 atoms where the criterion at the node
+   holds for 40 (potential energy), and 137 for 189 (kinetic energy)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, DynamicGroupAsWrittenIsItsCriterionAtTheNode)
+{
+  for (const std::string crit : {"c_pea>-5.5", "c_kea>1.5", "x>5.0"}) {
+    Sim s;
+    lj_liquid(s, 6);
+    s.cmds({"compute pea all pe/atom", "compute kea all ke/atom", "variable infast atom " + crit,
+            "group fast dynamic all var infast every 5", "variable flag atom " + crit,
+            "compute ntrue all reduce sum v_flag", "variable off equal abs(count(fast)-c_ntrue)",
+            "variable fine equal f_1[8]+f_1[9]", "fix 1 all pe_jump/async 5 fast",
+            "fix seen all ave/time 5 1 5 v_off v_fine c_ntrue mode scalar ave running", "thermo 0",
+            "run 100"});
+    EXPECT_EQ(s.vec("seen", 0), 0.0) << crit;     // mean |count(fast) - criterion|
+    EXPECT_GT(s.vec("seen", 1), 20.0) << crit;    // atoms on the fine clock
+  }
+}
+
+/* ----------------------------------------------------------------------
    a run continued from a restart file written at a coarse node, with the
    region moving on, gives the unbroken run's trajectory: the fine clock
    (a group of the fix) and the clocks' state are in the restart file
