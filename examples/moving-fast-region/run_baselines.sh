@@ -56,6 +56,10 @@ run cascade track-auto -var integrator nve -var fast auto
 # updates (every N steps): every 50 where the region moves slowly (crack
 # tip, projectile), every K elsewhere
 run crack async-dyn       -var integrator async -var K 10 -var fast dynamic -var R 10.0 -var every 50
+# the crack with the energy tip finder (no neighbor list of its own)
+run crack sync-pe         -var integrator sync -var tipfind pe
+run crack async-pe        -var integrator async -var K 10 -var fast static -var R 10.0 -var tipfind pe
+run crack async-dyn-pe    -var integrator async -var K 10 -var fast dynamic -var R 10.0 -var every 50 -var tipfind pe
 run impact async-dyn      -var integrator async -var K 10 -var fast dynamic -var R 8.0  -var every 50
 run impact async-dyn-r12  -var integrator async -var K 10 -var fast dynamic -var R 12.0 -var every 50
 run impact async-auto     -var integrator async -var K 10 -var fast auto -var kthr 0.01 -var every 10 -var skin 0.5
