@@ -304,12 +304,16 @@ void InteractionSplit::split_topology(TopoList &t)
   t.nfine = 0;
   if (t.nfull == 0) return;
   const int width = t.natoms + 1;    // atoms and type
-  int *rows = t.full[0];             // the entries are one array (see TopoList)
+  // the entries are one array (see TopoList); entry n starts at row(n)
+  int *rows = t.full[0];
+  const auto row = [rows, width](int n) {
+    return rows + static_cast<size_t>(n) * width;
+  };
   // FINE if any of the atoms of entry n is on the fine clock
   const int *mask = atom->mask;
   const int bits = groupbit | finebit;
   const auto is_fine = [&](int n) {
-    const int *entry = rows + n * width;
+    const int *entry = row(n);
     for (int k = 0; k < t.natoms; k++)
       if ((mask[entry[k]] & bits) == bits) return true;
     return false;
@@ -323,13 +327,13 @@ void InteractionSplit::split_topology(TopoList &t)
   for (int n = 0; n <= last;) {
     int m = n;
     while ((m <= last) && is_fine(m)) ++m;
-    if (t.nfine != n) std::copy(rows + n * width, rows + m * width, rows + t.nfine * width);
+    if (t.nfine != n) std::copy(row(n), row(m), row(t.nfine));
     t.nfine += m - n;
     for (n = m; (m <= last) && !is_fine(m);) ++m;
-    coarse_entries.insert(coarse_entries.end(), rows + n * width, rows + m * width);
+    coarse_entries.insert(coarse_entries.end(), row(n), row(m));
     n = m;
   }
-  std::copy(coarse_entries.begin(), coarse_entries.end(), rows + t.nfine * width);
+  std::copy(coarse_entries.begin(), coarse_entries.end(), row(t.nfine));
 }
 
 /* ---------------------------------------------------------------------- */
