@@ -226,8 +226,8 @@ bool ClockAssignment::updated_in(bigint node, int steps) const
 /* ----------------------------------------------------------------------
    at the end of the coarse step that ends at step node, every atom at its
    node: a dynamic fast group updated in that coarse step is evaluated
-   again, as LAMMPS' own update at the end of a step of fix nve would see
-   it. LAMMPS' own updates, during the force computation, see the atoms
+   again, on the state that output at the node shows. LAMMPS' own
+   updates, during the force computation, see the atoms
    inside a step, and the per-atom energies of the fine interactions only.
    Here the criterion sees the positions (ghost atoms' too: unless the node
    is written, they are still where the last fine step's force evaluation
