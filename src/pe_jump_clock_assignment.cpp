@@ -215,8 +215,9 @@ void ClockAssignment::assign(InteractionSplit &split, const std::vector<int> *ch
 
 bool ClockAssignment::updated_in(bigint node, int steps) const
 {
-  if (!dynamic) return false;
-  const bigint every = modify->get_fix_by_id("GROUP_" + fast_group)->nevery;
+  const Fix *criterion = dynamic ? modify->get_fix_by_id("GROUP_" + fast_group) : nullptr;
+  if (!criterion) return false;
+  const bigint every = criterion->nevery;
   const auto updates = [every](bigint step) {    // updates of the group up to step
     return (step >= 0) ? step / every : -((every - 1 - step) / every);
   };
