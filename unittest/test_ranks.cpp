@@ -163,8 +163,8 @@ TEST(PEJumpRanks, LJLiquidSameOn1And2And4Ranks)
                "region rr sphere 4 4 4 2.5 units box\ngroup dg dynamic all region rr every 5\n"
                "fix 1 all pe_jump/async 5 dg buffer 1",
                // a criterion that reads the neighbors, evaluated at coarse
-               // nodes (differed in the fourth digit of pe after 50 steps
-               // when the ghost atoms were not brought to the node)
+               // nodes (the rank counts differed when the ghost atoms were
+               // not brought to the node)
                "compute crd all coord/atom cutoff 1.3\nvariable few atom c_crd<11\n"
                "group dg dynamic all var few every 5\nfix 1 all pe_jump/async 5 dg"},
               false, 500, 5.0 * std::cbrt(4.0 / 0.8442));
