@@ -185,6 +185,7 @@ void InteractionSplit::build()
   // the subsets of the last build are refilled (their storage is kept)
   size_t npairs = 0;
   cross.clear();
+  label_clocks();
   for (int n = 0; n < neighbor->nlist; n++) {
     NeighList *list = neighbor->lists[n];
     if (!list || list->occasional || (list->requestor_type != NeighList::PAIR)) continue;
@@ -231,14 +232,6 @@ void InteractionSplit::split_pairs(PairList &p)
   const int inum = list->inum;
   const int *ilist = list->ilist;
 
-  // per atom (owned and ghost) 1 if on the fine clock, 2 if on the coarse
-  // clock, 0 if not integrated: a pair is FINE if either atom is fine
-  const int *mask = atom->mask;
-  clock_of.resize(nall);
-  for (int i = 0; i < nall; i++)
-    clock_of[i] = !(mask[i] & groupbit) ? 0 : ((mask[i] & finebit) ? 1 : 2);
-  const int *clock = clock_of.data();
-
   // one buffer for both subsets: the FINE neighbors of the atoms in list
   // order from its front, the COARSE ones from its back (each atom's in
   // list order), so that it is sized once and filled in one pass
@@ -256,30 +249,8 @@ void InteractionSplit::split_pairs(PairList &p)
 
   for (int ii = 0; ii < inum; ii++) {
     const int i = ilist[ii];
-    const int *jlist = list->firstneigh[i];
     const int n = list->numneigh[i];
-    int nfine = n;
-    if (clock[i] != 1) {
-      nfine = 0;
-      for (int jj = 0; jj < n; jj++) nfine += (clock[jlist[jj] & NEIGHMASK] == 1);
-    }
-    int *coarse_at = back - (n - nfine);
-    if (nfine == n) {
-      std::copy(jlist, jlist + n, front);
-    } else if (nfine == 0) {
-      std::copy(jlist, jlist + n, coarse_at);
-    } else {
-      int *f = front, *c = coarse_at;
-      for (int jj = 0; jj < n; jj++) *((clock[jlist[jj] & NEIGHMASK] == 1) ? f++ : c++) = jlist[jj];
-    }
-    // FINE pairs of a fine and a coarse atom
-    for (int jj = 0; jj < nfine; jj++) {
-      const int j = front[jj] & NEIGHMASK;
-      if ((clock[i] == 2) || (clock[j] == 2)) {
-        cross.push_back(i);
-        cross.push_back(j);
-      }
-    }
+    const int nfine = sort_neighbors(i, list->firstneigh[i], n, front, back);
     if (nfine > 0) {
       fine.ilist.push_back(i);
       fine.numneigh[i] = nfine;
@@ -287,12 +258,61 @@ void InteractionSplit::split_pairs(PairList &p)
       front += nfine;
     }
     if (nfine < n) {
+      back -= n - nfine;
       coarse.ilist.push_back(i);
       coarse.numneigh[i] = n - nfine;
-      coarse.firstneigh[i] = coarse_at;
-      back = coarse_at;
+      coarse.firstneigh[i] = back;
     }
   }
+}
+
+/* ----------------------------------------------------------------------
+   per atom (owned and ghost) 1 if on the fine clock, 2 if on the coarse
+   clock, 0 if not integrated: a pair is FINE if either atom is fine
+------------------------------------------------------------------------- */
+
+void InteractionSplit::label_clocks()
+{
+  const int *mask = atom->mask;
+  const int nall = atom->nlocal + atom->nghost;
+  clock_of.resize(nall);
+  for (int i = 0; i < nall; i++)
+    clock_of[i] = !(mask[i] & groupbit) ? 0 : ((mask[i] & finebit) ? 1 : 2);
+}
+
+/* ----------------------------------------------------------------------
+   the n neighbors of atom i at jlist: the FINE ones to fine_at, the
+   COARSE ones to the places just before coarse_end, each in list order;
+   the FINE pairs of a fine and a coarse atom are noted in cross. Returns
+   the number of FINE ones
+------------------------------------------------------------------------- */
+
+int InteractionSplit::sort_neighbors(int i, const int *jlist, int n, int *fine_at, int *coarse_end)
+{
+  if (n <= 0) return 0;
+  const int *clock = clock_of.data();
+  int nfine = n;
+  if (clock[i] != 1) {
+    nfine = 0;
+    for (int jj = 0; jj < n; jj++) nfine += (clock[jlist[jj] & NEIGHMASK] == 1);
+  }
+  int *coarse_at = coarse_end - (n - nfine);
+  if (nfine == n) {
+    std::copy(jlist, jlist + n, fine_at);
+  } else if (nfine == 0) {
+    std::copy(jlist, jlist + n, coarse_at);
+  } else {
+    int *f = fine_at, *c = coarse_at;
+    for (int jj = 0; jj < n; jj++) *((clock[jlist[jj] & NEIGHMASK] == 1) ? f++ : c++) = jlist[jj];
+  }
+  for (int jj = 0; jj < nfine; jj++) {
+    const int j = fine_at[jj] & NEIGHMASK;
+    if ((clock[i] == 2) || (clock[j] == 2)) {
+      cross.push_back(i);
+      cross.push_back(j);
+    }
+  }
+  return nfine;
 }
 
 /* ---------------------------------------------------------------------- */

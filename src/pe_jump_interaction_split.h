@@ -160,6 +160,8 @@ namespace PEJump {
     // closer than the pair style's cutoff, and than reach if > 0
     bool within_cutoff(int i, int j, double reach = 0.0) const;    // needs a pair style
     void split_pairs(PairList &);
+    void label_clocks();    // clock_of for the owned and ghost atoms
+    int sort_neighbors(int i, const int *jlist, int n, int *fine_at, int *coarse_end);
     void split_topology(TopoList &);
   };
 
