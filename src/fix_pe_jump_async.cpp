@@ -1325,9 +1325,9 @@ void FixPEJumpAsync::final_integrate()
 
   // the labels are output only: take them where something looks, when
   // at_step_end() has brought the ghosts to the node
-  if (coarse_end && (nodes->step_tallies() || others->step_observed()))
-    classes->label(*split, *assign, groupbit);
-  if (coarse_end) assign->evaluate_at_node(update->ntimestep, clocks->steps());
+  const bool ghosts_at_node = nodes->step_tallies() || others->step_observed();
+  if (coarse_end && ghosts_at_node) classes->label(*split, *assign, groupbit);
+  if (coarse_end) assign->evaluate_at_node(update->ntimestep, clocks->steps(), ghosts_at_node);
 }
 
 /* ----------------------------------------------------------------------

@@ -230,17 +230,18 @@ bool ClockAssignment::updated_in(bigint node, int steps) const
    again, on the state that output at the node shows. LAMMPS' own
    updates, during the force computation, see the atoms
    inside a step, and the per-atom energies of the fine interactions only.
-   Here the criterion sees the positions (ghost atoms' too: unless the node
-   is written, they are still where the last fine step's force evaluation
-   left them), velocities, time and (on steps that tally them, where the
-   fix evaluates everything at the node) per-atom energies of the node;
-   output at the node shows this group, and the clocks follow it
+   Here the criterion sees the positions (ghost atoms' too: unless
+   ghosts_at_node, the node is not written and they are still where the
+   last fine step's force evaluation left them), velocities, time and (on
+   steps that tally them, where the fix evaluates everything at the node)
+   per-atom energies of the node; output at the node shows this group, and
+   the clocks follow it
 ------------------------------------------------------------------------- */
 
-void ClockAssignment::evaluate_at_node(bigint node, int steps)
+void ClockAssignment::evaluate_at_node(bigint node, int steps, bool ghosts_at_node)
 {
   if (!updated_in(node, steps)) return;
-  comm->forward_comm();
+  if (!ghosts_at_node) comm->forward_comm();
   modify->get_fix_by_id("GROUP_" + fast_group)->setup(0);
 }
 

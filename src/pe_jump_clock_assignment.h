@@ -59,12 +59,13 @@ namespace PEJump {
     // a dynamic fast group, or atoms chosen by the fix (chosen[i] = 1,
     // owned atoms; nullptr: none): at the end of the coarse step that ends
     // at step node (steps fine steps), evaluate_at_node() evaluates the
-    // group's criterion again after its updates; at the coarse node, due()
+    // group's criterion again after its updates (ghosts_at_node: the ghost
+    // atoms are at the node already); at the coarse node, due()
     // tells if they changed (global), then follow() takes them (and the
     // buffer) on the fine clock; to_fine[i] (owned atoms) is 1 for an atom
     // that went to the fine clock, -1 to the coarse clock, 0 else. True if
     // any atom changed clock (global)
-    void evaluate_at_node(bigint node, int steps);
+    void evaluate_at_node(bigint node, int steps, bool ghosts_at_node);
     bool due(const std::vector<int> *chosen, bigint node, int steps);
     bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
     bool follows_group() const { return dynamic || automatic; }
