@@ -1315,8 +1315,8 @@ void FixPEJumpAsync::final_integrate()
   if (!coarse_end && others->step_observed()) catch_up_all();
 
   split->activate(InteractionSplit::ALL);
-  const double at_end =
-      nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
+  // no other time integrator (refuse_other_fixes()): no atoms to leave out
+  const double at_end = nodes->at_step_end(others->step_observed(), 0);
   split->restore();
   evals.step += at_end;
   if (at_end > 0.0) first->forces_written();    // on every atom
