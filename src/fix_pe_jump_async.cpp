@@ -942,10 +942,24 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
   AtomList changed;
   for (int i = 0; i < atom->nlocal; i++)
     if (to_fine[i] && (atom->mask[i] & groupbit)) changed.push_back(i);
+  const PEJump::AtomSet atoms = group_atoms(&changed);
+  double before[2], after[2];
+  scheme->energies_now(atoms, before);
   const double fine = update->dt, coarse = clocks->steps() * update->dt;
-  scheme->start(group_atoms(&changed), f, 1.0, [&](int i) {
+  scheme->start(atoms, f, 1.0, [&](int i) {
     return (to_fine[i] > 0) ? fine : coarse;
   });
+  scheme->energies_now(atoms, after);
+  // the pseudo-energy pe + (1/2) sum m v^{n-1/2}.v^{n+1/2} = pe + kinetic -
+  // jump energy, with positions and node velocities kept
+  assign->add_change_energy(
+      before[1] - after[1],
+      [&]() {
+        double e[2];
+        scheme->energies_now(group_atoms(), e);
+        return e[0] + e[1];
+      },
+      style);
 }
 
 /* ----------------------------------------------------------------------

@@ -28,10 +28,15 @@
 #include "pe_jump_interaction_split.h"
 #include "update.h"
 
+#include <cmath>
 #include <cstdint>
 
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
+
+// share of the group's kinetic energy that the clock changes of a run may
+// add to the pseudo-energy before a warning
+static constexpr double CHANGE_ENERGY_SHARE = 0.05;
 
 /* ---------------------------------------------------------------------- */
 
@@ -39,8 +44,9 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, Buff
                                  bool chooses) :
     Pointers(lmp),
     fix(owner), fast_group(fast), buffer(layers), finebit(0), clockbit(0), dynamic(false),
-    automatic(chooses), file_dynamic(false), saved_buffer{-1, 0.0},
-    saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0}, tally{0, 0, 0}, reverse_flags(nullptr)
+    automatic(chooses),
+    file_dynamic(false), saved_buffer{-1, 0.0}, saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
+    reverse_flags(nullptr)
 {
   const int ifast = group->find(fast_group);
   if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", fast_group);
@@ -255,7 +261,7 @@ void ClockAssignment::evaluate_at_node(bigint node, int steps, bool ghosts_at_no
 bool ClockAssignment::due(const std::vector<int> *chosen, bigint node, int steps)
 {
   if (!dynamic && !automatic) return false;
-  ++tally[NODES];
+  ++changes.tally[Changes::NODES];
   if (!updated_in(node, steps) && !automatic) return false;
   double now[2];
   fast_signature(now, chosen);
@@ -284,8 +290,8 @@ bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
   }
   bigint moved = 0;
   MPI_Allreduce(&local, &moved, 1, MPI_LMP_BIGINT, MPI_SUM, world);
-  tally[ATOMS] += moved;
-  if (moved) ++tally[CHANGED];
+  changes.tally[Changes::ATOMS] += moved;
+  if (moved) ++changes.tally[Changes::CHANGED];
   changed();    // the state of the atoms is carried over: it fits this fine clock
   return moved != 0;
 }
@@ -298,11 +304,41 @@ bool ClockAssignment::follow(InteractionSplit &split, std::vector<int> &to_fine,
 
 void ClockAssignment::report(const char *style)
 {
+  const bigint *tally = changes.tally;
   if (follows_group() && (comm->me == 0))
     utils::logmesg(lmp, "Fix {}: {} atoms changed clock at {} of {} coarse nodes\n", style,
-                   tally[ATOMS], tally[CHANGED], tally[NODES]);
+                   tally[Changes::ATOMS], tally[Changes::CHANGED], tally[Changes::NODES]);
   // the next run counts anew (one with "pre no" has no setup)
-  tally[ATOMS] = tally[CHANGED] = tally[NODES] = 0;
+  changes = Changes();
+}
+
+/* ----------------------------------------------------------------------
+   atoms that flicker between the clocks add up what their restarted jumps
+   change: at a coarse step the slow dynamics cannot resolve (its jumps
+   large against the velocities) they pump the energy up while every
+   atom's step stays small, where the stability guard sees nothing
+------------------------------------------------------------------------- */
+
+void ClockAssignment::add_change_energy(double dh, const std::function<double()> &kinetic,
+                                        const char *style)
+{
+  changes.energy += dh;
+  if (changes.kinetic < 0.0) changes.kinetic = kinetic();
+  const double added = fabs(changes.energy);
+  if (changes.warned || (added <= CHANGE_ENERGY_SHARE * changes.kinetic)) return;
+  const double now = kinetic();
+  const double scale = MAX(changes.kinetic, now);
+  if (added <= CHANGE_ENERGY_SHARE * scale) return;
+  changes.warned = true;
+  if (comm->me == 0)
+    error->warning(FLERR,
+                   "Fix {}: by step {} the clock changes of this run have changed the "
+                   "pseudo-energy by {:.8g}, {:.3g} % of the kinetic energy of the group ({:.8g}): "
+                   "an atom that changes clock restarts its jump, and atoms that change clock "
+                   "often add this up. Reduce the coarse step (K or the time step), or put the "
+                   "atoms that change clock into the fast group or its buffer{}",
+                   style, update->ntimestep, changes.energy, 100.0 * added / scale, scale,
+                   automatic ? ", or raise the tolerance of fast auto" : "");
 }
 
 /* ----------------------------------------------------------------------

@@ -16,6 +16,7 @@
 
 #include "pe_jump_node_sampler.h"
 
+#include <functional>
 #include <string>
 
 namespace LAMMPS_NS {
@@ -78,6 +79,13 @@ namespace PEJump {
     // the clock changes of a run (atoms, coarse nodes with a change, coarse
     // nodes looked at), reported in the log at its end, and counted anew
     void report(const char *style);
+    // after a change: dh is what it added to the pseudo-energy (an atom
+    // that changes clock restarts its jump: the pseudo-energy changes by
+    // the jump energy it had less the one it starts with; global). A
+    // warning, once per run, where the changes of the run added up to more
+    // than a share of the group's kinetic energy (the larger of that at the
+    // first change and kinetic(), collective, called only then)
+    void add_change_energy(double dh, const std::function<double()> &kinetic, const char *style);
     const std::string &fast_group_name() const { return fast_group; }
     // true if the atoms on the fine clock changed since the last call (global)
     bool changed();
@@ -124,8 +132,13 @@ namespace PEJump {
     Buffer saved_buffer;      // of the last run (or restart file)
     double saved_clock[2];    // fine-clock atoms of the last run: number, ID hash
     double fast_seen[2];      // fast group at the last assignment: number, ID hash
-    enum { ATOMS, CHANGED, NODES };
-    bigint tally[3];                    // clock changes of the run (see report)
+    struct Changes {          // the clock changes of the run (see report)
+      enum { ATOMS, CHANGED, NODES };
+      bigint tally[3] = {0, 0, 0};
+      double energy = 0.0;      // added to the pseudo-energy
+      double kinetic = -1.0;    // of the group at the first change (-1: none yet)
+      bool warned = false;
+    } changes;
     std::vector<int> slow_flag;         // owned atoms: 1 if on the coarse clock
     std::vector<int> moving_flag;       // owned atoms: 1 if they move on fine steps
     std::vector<int> participant;       // owned and ghost atoms: in a fine interaction

@@ -430,7 +430,15 @@ int TwoStep::velocity_change(const AtomSet &set, bool can_reverse)
 const double *TwoStep::energies(const AtomSet &set)
 {
   if (cached_step == update->ntimestep) return cached;
+  energies_now(set, cached);
+  cached_step = update->ntimestep;
+  return cached;
+}
 
+/* ---------------------------------------------------------------------- */
+
+void TwoStep::energies_now(const AtomSet &set, double *e) const
+{
   double **v = atom->v;
   double **jmp = jump();
   double local[2] = {0.0, 0.0};
@@ -442,9 +450,7 @@ const double *TwoStep::energies(const AtomSet &set)
       local[1] += m * jmp[i][k] * jmp[i][k];
     }
   });
-  MPI_Allreduce(local, cached, 2, MPI_DOUBLE, MPI_SUM, world);
-  cached[0] *= 0.5 * force->mvv2e;
-  cached[1] *= 0.125 * force->mvv2e;
-  cached_step = update->ntimestep;
-  return cached;
+  MPI_Allreduce(local, e, 2, MPI_DOUBLE, MPI_SUM, world);
+  e[0] *= 0.5 * force->mvv2e;
+  e[1] *= 0.125 * force->mvv2e;
 }

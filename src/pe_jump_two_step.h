@@ -140,6 +140,8 @@ namespace PEJump {
     // after the state changed within one)
     const double *energies(const AtomSet &);
     void forget_energies() { cached_step = -1; }
+    // the same two sums now, not cached (global)
+    void energies_now(const AtomSet &, double *e) const;
 
    private:
     template <bool AHEAD, bool SIGN>
