@@ -34,9 +34,11 @@
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
 
-// share of the group's kinetic energy that the clock changes of a run may
-// add to the pseudo-energy before a warning
-static constexpr double CHANGE_ENERGY_SHARE = 0.05;
+// shares of the group's kinetic energy that the clock changes may add to
+// the pseudo-energy (since the fix was defined) before a warning, and
+// before an error
+static constexpr double CHANGE_ENERGY_WARN = 0.05;
+static constexpr double CHANGE_ENERGY_STOP = 0.5;
 
 /* ---------------------------------------------------------------------- */
 
@@ -308,8 +310,9 @@ void ClockAssignment::report(const char *style)
   if (follows_group() && (comm->me == 0))
     utils::logmesg(lmp, "Fix {}: {} atoms changed clock at {} of {} coarse nodes\n", style,
                    tally[Changes::ATOMS], tally[Changes::CHANGED], tally[Changes::NODES]);
-  // the next run counts anew (one with "pre no" has no setup)
-  changes = Changes();
+  // the next run counts anew (one with "pre no" has no setup); the
+  // pseudo-energy they changed adds up over the runs
+  for (bigint &n : changes.tally) n = 0;
 }
 
 /* ----------------------------------------------------------------------
@@ -325,20 +328,24 @@ void ClockAssignment::add_change_energy(double dh, const std::function<double()>
   changes.energy += dh;
   if (changes.kinetic < 0.0) changes.kinetic = kinetic();
   const double added = fabs(changes.energy);
-  if (changes.warned || (added <= CHANGE_ENERGY_SHARE * changes.kinetic)) return;
-  const double now = kinetic();
-  const double scale = MAX(changes.kinetic, now);
-  if (added <= CHANGE_ENERGY_SHARE * scale) return;
+  const double level = changes.warned ? CHANGE_ENERGY_STOP : CHANGE_ENERGY_WARN;
+  if (added <= level * changes.kinetic) return;
+  const double scale = MAX(changes.kinetic, kinetic());
+  if (added <= CHANGE_ENERGY_WARN * scale) return;
+  const std::string what = fmt::format(
+      "Fix {}: by step {} the clock changes since the fix was defined have changed the "
+      "pseudo-energy by {:.8g}, {:.3g} % of the kinetic energy of the group ({:.8g}): an atom "
+      "that changes clock restarts its jump, and atoms that change clock often add this up. "
+      "Reduce the coarse step (K or the time step), or put the atoms that change clock into the "
+      "fast group or its buffer{}",
+      style, update->ntimestep, changes.energy, 100.0 * added / scale, scale,
+      automatic ? ", or raise the tolerance of fast auto" : "");
+  if (added > CHANGE_ENERGY_STOP * scale)
+    error->all(FLERR, "{}; the fix stops where this exceeds {} %", what,
+               100.0 * CHANGE_ENERGY_STOP);
+  if (changes.warned) return;
   changes.warned = true;
-  if (comm->me == 0)
-    error->warning(FLERR,
-                   "Fix {}: by step {} the clock changes of this run have changed the "
-                   "pseudo-energy by {:.8g}, {:.3g} % of the kinetic energy of the group ({:.8g}): "
-                   "an atom that changes clock restarts its jump, and atoms that change clock "
-                   "often add this up. Reduce the coarse step (K or the time step), or put the "
-                   "atoms that change clock into the fast group or its buffer{}",
-                   style, update->ntimestep, changes.energy, 100.0 * added / scale, scale,
-                   automatic ? ", or raise the tolerance of fast auto" : "");
+  if (comm->me == 0) error->warning(FLERR, what);
 }
 
 /* ----------------------------------------------------------------------

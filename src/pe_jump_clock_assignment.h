@@ -82,9 +82,10 @@ namespace PEJump {
     // after a change: dh is what it added to the pseudo-energy (an atom
     // that changes clock restarts its jump: the pseudo-energy changes by
     // the jump energy it had less the one it starts with; global). A
-    // warning, once per run, where the changes of the run added up to more
-    // than a share of the group's kinetic energy (the larger of that at the
-    // first change and kinetic(), collective, called only then)
+    // warning, once, where the changes since the fix was defined added up
+    // to more than a share of the group's kinetic energy (the larger of
+    // that at the first change and kinetic(), collective, called only
+    // then), an error where they added more than half of it
     void add_change_energy(double dh, const std::function<double()> &kinetic, const char *style);
     const std::string &fast_group_name() const { return fast_group; }
     // true if the atoms on the fine clock changed since the last call (global)
@@ -132,7 +133,9 @@ namespace PEJump {
     Buffer saved_buffer;      // of the last run (or restart file)
     double saved_clock[2];    // fine-clock atoms of the last run: number, ID hash
     double fast_seen[2];      // fast group at the last assignment: number, ID hash
-    struct Changes {          // the clock changes of the run (see report)
+    // the clock changes of the run (see report), and what the changes
+    // since the fix was defined added to the pseudo-energy
+    struct Changes {
       enum { ATOMS, CHANGED, NODES };
       bigint tally[3] = {0, 0, 0};
       double energy = 0.0;      // added to the pseudo-energy

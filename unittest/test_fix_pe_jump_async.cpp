@@ -1489,26 +1489,31 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
    f_ID changes by the jump energy the atom had less the one it starts
    with. Atoms that change clock at every node at a coarse step with large
    jumps add this up while every atom's step stays small, where the
-   stability guard sees nothing (a liquid in real units with fast auto
-   0.05 at K = 4 went from 239 to 1013 kcal/mol in 2000 fs, fix nve at the
-   fine step stayed at 239). The fix warns when the changes of a run have
-   changed the pseudo-energy by more than 5 % of the group's kinetic
-   energy, with the change, which is that of pe + f_ID at the nodes up to
-   the quadrature error. 256-atom LJ liquid from the lattice, T = 1.5,
-   K = 5, fast auto 0.2, 200 steps: at h = 0.01 the warning at step 96
-   (+35.8; pe + f_ID changed by +33.7 up to the next node, +77 in the
-   run); at h = 0.005 none (-10.7 in the run)
+   stability guard sees nothing (a liquid of chains in real units with
+   fast auto 0.05 at K = 4 went from 239 to 1014 kcal/mol in 2000 fs, fix
+   nve at the fine step to 243). The fix warns when the changes since it
+   was defined have changed the pseudo-energy by more than 5 % of the
+   group's kinetic energy, with the change, which is that of pe + f_ID at
+   the nodes up to the quadrature error, and stops beyond 50 %. 256-atom
+   LJ liquid from the lattice, T = 1.5, K = 5, fast auto 0.2: at h = 0.01
+   the warning at step 96 (+35.8; pe + f_ID changed by +33.7 up to the
+   next node, +77 in 200 steps), the error at step 606 (+289, 50.4 %) in
+   the run that follows; at h = 0.005 neither (-10.7 in 200 steps)
 ------------------------------------------------------------------------- */
 
 TEST(PEJumpAsync, PseudoEnergyThatClockChangesAddIsWarnedAbout)
 {
+  const std::vector<std::string> liquid = {"group none id 0",
+                                           "fix 1 all pe_jump/async 5 none fast auto 0.2",
+                                           "variable Ht equal pe+f_1",
+                                           "thermo_style custom step pe v_Ht",
+                                           "thermo_modify norm no format float %.15g",
+                                           "thermo 5"};
   for (const double h : {0.01, 0.005}) {
     Sim s(MPI_COMM_WORLD, false);
     lj_liquid(s);
-    s.cmds({"group none id 0", fmt::format("timestep {}", h),
-            "fix 1 all pe_jump/async 5 none fast auto 0.2", "variable Ht equal pe+f_1",
-            "thermo_style custom step pe v_Ht", "thermo_modify norm no format float %.15g",
-            "thermo 5"});
+    s.cmd(fmt::format("timestep {}", h));
+    s.cmds(liquid);
     ::testing::internal::CaptureStdout();
     s.cmd("run 200");
     const std::string log = ::testing::internal::GetCapturedStdout();
@@ -1520,28 +1525,44 @@ TEST(PEJumpAsync, PseudoEnergyThatClockChangesAddIsWarnedAbout)
       if (std::regex_match(line, m, row)) pseudo[std::stoi(m[1])] = std::stod(m[2]);
     }
     ASSERT_EQ(pseudo.size(), 41U) << h;
+    const std::regex warning("by step (\\d+) the clock changes since the fix was defined have "
+                             "changed the pseudo-energy by (\\S+), (\\S+) % of the kinetic "
+                             "energy of the group \\((\\S+)\\)");
     std::smatch warned;
-    const bool found = std::regex_search(
-        log, warned,
-        std::regex("by step (\\d+) the clock changes of this run have changed the "
-                   "pseudo-energy by (\\S+), (\\S+) % of the kinetic energy of the group "
-                   "\\((\\S+)\\)"));
-    if (h > 0.0075) {
-      ASSERT_TRUE(found) << log;
-      EXPECT_EQ(log.find("clock changes of this run", warned.position(0) + warned.length(0)),
-                std::string::npos);
-      const int step = std::stoi(warned[1]);
-      const double added = std::stod(warned[2]);
-      EXPECT_NEAR(std::stod(warned[3]), 100.0 * std::fabs(added) / std::stod(warned[4]), 1e-2);
-      EXPECT_GT(std::stod(warned[3]), 5.0);
-      // changed at the node step - 1, seen at the next one
-      const double seen = pseudo.at(step - 1 + 5) - pseudo.at(0);
-      EXPECT_NEAR(seen, added, 0.1 * std::fabs(added));
-      EXPECT_GT(pseudo.at(200) - pseudo.at(0), 50.0);
-    } else {
+    const bool found = std::regex_search(log, warned, warning);
+    if (h < 0.0075) {
       EXPECT_FALSE(found) << log;
       EXPECT_LT(std::fabs(pseudo.at(200) - pseudo.at(0)), 20.0);
+      continue;
     }
+    ASSERT_TRUE(found) << log;
+    EXPECT_EQ(log.find("clock changes since", warned.position(0) + warned.length(0)),
+              std::string::npos);
+    const int step = std::stoi(warned[1]);
+    const double added = std::stod(warned[2]);
+    EXPECT_NEAR(std::stod(warned[3]), 100.0 * std::fabs(added) / std::stod(warned[4]), 1e-2);
+    EXPECT_GT(std::stod(warned[3]), 5.0);
+    // changed at the node step - 1, seen at the next one
+    const double seen = pseudo.at(step - 1 + 5) - pseudo.at(0);
+    EXPECT_NEAR(seen, added, 0.1 * std::fabs(added));
+    EXPECT_GT(pseudo.at(200) - pseudo.at(0), 50.0);
+
+    // the changes add up over the runs, to the error
+    Sim t;
+    lj_liquid(t);
+    std::string stopped = "no error";
+    try {
+      t.cmd(fmt::format("timestep {}", h));
+      t.cmds(liquid);
+      t.cmds({"run 200", "run 600"});
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      stopped = e.what();
+    }
+    std::smatch at;
+    ASSERT_TRUE(std::regex_search(stopped, at, warning)) << stopped;
+    EXPECT_GT(std::stoi(at[1]), 200);
+    EXPECT_GT(std::stod(at[3]), 50.0);
+    EXPECT_THAT(stopped, ContainsRegex("the fix stops where this exceeds 50 %"));
   }
 }
 
