@@ -295,7 +295,7 @@ bool StabilityGuard::conclude(const char *style, const double *local, double &fl
     // impact) has jumps that grow with the forces by any factor: unstable
     // only if the jumps carry a share of the kinetic energy
     const double *e = energies();
-    const double kinetic = e[0] + 2.0 * e[1];    // e[0] = K - 2 (jump energy)
+    const double kinetic = e[0] + e[1];    // e[0] = kinetic - jump energy
     if (e[1] < MOTION_SHARE * kinetic) {
       jump_ref = global[3];
       verdict = judge(global);
