@@ -331,7 +331,8 @@ void ClockAssignment::add_change_energy(double dh, const std::function<double()>
   const double level = changes.warned ? CHANGE_ENERGY_STOP : CHANGE_ENERGY_WARN;
   if (added <= level * changes.kinetic) return;
   const double scale = MAX(changes.kinetic, kinetic());
-  if (added <= CHANGE_ENERGY_WARN * scale) return;
+  // (a group at rest has nothing to compare with)
+  if ((scale <= 0.0) || (added <= CHANGE_ENERGY_WARN * scale)) return;
   const std::string what = fmt::format(
       "Fix {}: by step {} the clock changes since the fix was defined have changed the "
       "pseudo-energy by {:.8g}, {:.3g} % of the kinetic energy of the group ({:.8g}): an atom "
