@@ -329,13 +329,12 @@ void InteractionSplit::split_topology(TopoList &t)
   const auto row = [rows, width](int n) {
     return rows + static_cast<size_t>(n) * width;
   };
-  // FINE if any of the atoms of entry n is on the fine clock
-  const int *mask = atom->mask;
-  const int bits = groupbit | finebit;
+  // FINE if any of the atoms of entry n is on the fine clock (label_clocks())
+  const int *clock = clock_of.data();
   const auto is_fine = [&](int n) {
     const int *entry = row(n);
     for (int k = 0; k < t.natoms; k++)
-      if ((mask[entry[k]] & bits) == bits) return true;
+      if (clock[entry[k]] == 1) return true;
     return false;
   };
 
