@@ -50,6 +50,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
 
 using namespace LAMMPS_NS;
@@ -93,6 +94,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   const bool compensate = (opts.compensate < 0) ? (opts.adapt_eps > 0.0) : (opts.compensate != 0);
   steps =
       new StepControl(lmp, *state, opts.adapt_eps, opts.adapt_dtmin, opts.adapt_dtmax, compensate);
+  damping = new PEJump::ParasiticDamping(*state);
 
   time_integrate = 1;
   scalar_flag = 1;
@@ -116,7 +118,6 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
   scheme->fresh = 0;
-  damping = new PEJump::ParasiticDamping();
   advance_pending = 0.0;
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -178,7 +179,6 @@ void FixPEJump::init()
   others->sort(*sampler);
   sampler->refuse_velocity_forces(style, rule->name(), rule->only_end_nodes());
   sampler->refuse_stateful_forces(style, rule->name(), rule->only_end_nodes());
-  maxexchange = state->values();
 
   // forces that the rule does not integrate (other fixes that add forces,
   // contributions left out by sample) act as impulses at the primary node:
@@ -201,6 +201,7 @@ void FixPEJump::init()
   // Verlet, whose jumps [v]^n = h a^n have no such mode: auto leaves it be
   damping->init(opts.damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
                 others->thermostat_forces() > 0);
+  maxexchange = state->values();    // (damping may have added its fields)
   check_others_for_rule();
   if (automatic) automatic->check_compute(style);
   if (present && !(opts.sample_mask & present) && (comm->me == 0))
@@ -587,6 +588,7 @@ void FixPEJump::final_integrate()
   else
     finish_step(favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
+  damping->set_history(damping->beta(h_step) > 0.0);
 
   if (rest != 0.0)
     tally_at_node();
@@ -624,9 +626,13 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
   // the next step (velocity Verlet)
   const bool centre_kick = split_primary() && !keep_start;
   const bool end_kick = split_primary() && keep_start;
-  // parasitic damping: [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps
-  // the smooth jump h a and multiplies the alternating one by -(1 - beta)
+  // parasitic damping: the jump is pulled towards the smooth jump at the
+  // node, centred on it from this step's and the last step's impulses
   const double beta = damping->beta(h_step);
+  double **dlast = (beta > 0.0) ? damping->impulses() : nullptr;
+  double **plast = damping->differences();
+  const bool history = damping->has_history();
+  constexpr double NONE = std::numeric_limits<double>::quiet_NaN();
   if (!centre_kick && !end_kick && (beta == 0.0) && !fhist) {
     scheme->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, fingerprint}, mag);
     return;
@@ -642,10 +648,16 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
     for (int k = 0; k < 3; k++) {
       if (centre_kick) vh[k] += 0.5 * dtfm * (f[i][k] - sampled[i][k]);
       x[i][k] += rest * vh[k];
-      if (beta > 0.0) jmp[k] *= 1.0 - beta;
       if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - sampled[i][k]);
-      vnew[k] =
-          PEJump::TwoStep::jump_component((1.0 - 0.5 * beta) * dtfm * favg[i][k], vh[k], jmp[k]);
+      double d = dtfm * favg[i][k];
+      if (dlast) {
+        // (impulses kept as h <F>: the last step's size may differ)
+        const double dl = history ? dtfm * dlast[i][k] / h_step : NONE;
+        PEJump::ParasiticDamping::component(beta, d, dl, history ? plast[i][k] : NONE, jmp[k],
+                                            plast[i][k]);
+        dlast[i][k] = h_step * favg[i][k];
+      }
+      vnew[k] = PEJump::TwoStep::jump_component(d, vh[k], jmp[k]);
       v[i][k] = vh[k];
       jump[i][k] = jmp[k];
       if (fhist) fhist[i][k] = favg[i][k];
@@ -743,6 +755,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
       sampler->has_projections();
   scheme->started = 1;
   steps->forget();
+  damping->set_history(false);
   guard->forget_stats();
 }
 
@@ -960,8 +973,8 @@ void FixPEJump::finish_check(const double *local)
 
 /* ----------------------------------------------------------------------
    damp auto damps in this run, or from this step on (a thermostat acts):
-   say so, since the damping over a number of steps is first order in the
-   time step
+   say so (the damping changes the trajectory at second order in the time
+   step; damp 0 turns it off)
 ------------------------------------------------------------------------- */
 
 void FixPEJump::note_damping(bool from_now) const
@@ -969,11 +982,7 @@ void FixPEJump::note_damping(bool from_now) const
   if (comm->me != 0) return;
   const std::string when = from_now ? fmt::format("from step {}", update->ntimestep)
                                     : std::string("in this run");
-  utils::logmesg(lmp,
-                 "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat "
-                 "acts): etotal, ecouple and econserve then change at first order in the time "
-                 "step; damp 0 turns the damping off, damp tau (time units) makes it second "
-                 "order\n",
+  utils::logmesg(lmp, "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat acts)\n",
                  style, PEJump::ParasiticDamping::AUTO_STEPS, when);
 }
 
@@ -1112,8 +1121,11 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  // + 2: the census follows; + 4: damp auto damps since a velocity change
-  list[0] = ((scheme->started > 0) ? 1 : 0) + 2 + (damping->kicked() ? 4 : 0);
+  // + 2: the census follows; + 4: damp auto damps since a velocity change;
+  // + 8: the last step was damped (the damping's per-atom values are
+  // valid); + 16: they follow the scheme's per-atom state
+  list[0] = ((scheme->started > 0) ? 1 : 0) + 2 + (damping->kicked() ? 4 : 0) +
+      (damping->has_history() ? 8 : 0) + (damping->allocated() ? 16 : 0);
   list[1] = rule->family();
   list[2] = rule->points();
   list[3] = evals.total;
@@ -1134,6 +1146,8 @@ void FixPEJump::restart(char *buf)
   steps->load(&list[4]);
   if (head >= 2) scheme->load_census(&list[6]);
   damping->set_kicked((head & 4) != 0);
+  if (head & 16) damping->allocate();
+  damping->set_history(((head & 8) != 0) && scheme->started);
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "

@@ -36,6 +36,33 @@ static constexpr int ADAPT_BISECT = 40;         // bisections of the largest adm
 
 /* ---------------------------------------------------------------------- */
 
+ParasiticDamping::ParasiticDamping(AtomState &table) : state(table) {}
+
+/* ---------------------------------------------------------------------- */
+
+void ParasiticDamping::allocate()
+{
+  if (allocated()) return;
+  impulse_field = state.add("damp_impulse", 3, std::nan(""));
+  difference_field = state.add("damp_difference", 3, std::nan(""));
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **ParasiticDamping::impulses() const
+{
+  return allocated() ? state.vec(impulse_field) : nullptr;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **ParasiticDamping::differences() const
+{
+  return allocated() ? state.vec(difference_field) : nullptr;
+}
+
+/* ---------------------------------------------------------------------- */
+
 void ParasiticDamping::init(double damp_time, double dt, bool thermostats, bool forcing)
 {
   automatic = (damp_time < 0.0);
@@ -47,6 +74,7 @@ void ParasiticDamping::init(double damp_time, double dt, bool thermostats, bool 
     rate = 1.0 / (AUTO_STEPS * dt);
   on = (damp_time > 0.0) || (automatic && thermostats && (forcing || ever_changed));
   impulse = 0;
+  if ((damp_time > 0.0) || (automatic && thermostats)) allocate();
 }
 
 /* ---------------------------------------------------------------------- */

@@ -16,6 +16,8 @@
 
 #include "pe_jump_node_sampler.h"
 
+#include <cmath>
+
 namespace LAMMPS_NS {
 namespace PEJump {
   class AtomState;
@@ -27,20 +29,36 @@ namespace PEJump {
 
   // Damping of the parasitic period-2 mode (damp keyword), which
   // thermostats drive (random forces, stochastic or repeated velocity
-  // rescaling): [v]^{n+1} = (2 - beta) h a - (1 - beta) [v]^n keeps the
-  // smooth jump h a and multiplies the alternating one by -(1 - beta).
+  // rescaling). With d_n = 2 h <F>/m the impulse of step n, a damped step
+  // takes
+  //   [v]^{n+1} = d_n - [v]^n + beta (3 P^n - P^{n-1})/4,
+  //   P^n = [v]^n - (d_{n-1} + d_n)/4,
+  // where P^n is the jump less the smooth jump at the node estimated from
+  // the two steps beside it: (-1)^n c for the alternating jump, which is
+  // multiplied by -(1 - beta) per step, and of order h^3 and even in time
+  // on a smooth trajectory. The combination of two nodes puts the pull
+  // half a step later, where the jump it changes acts: on a mode of
+  // frequency omega the damping then changes the energy by beta O((h
+  // omega)^6) per step, against beta (h omega)^2/8 when the jump was
+  // pulled towards the step's own impulse d_n/2 (a negative drag that
+  // heated thermostatted runs; doc/theory.md, section 3.0).
+  // The impulses h <F> and the differences P of the last step are kept
+  // per atom (two state fields, 48 bytes) from the first run that may damp.
   // damp auto: over AUTO_STEPS steps, beside a thermostat only (from the
   // start if it adds forces, else from the first step where a velocity
-  // changed). A damping time of AUTO_STEPS steps makes the scheme first
-  // order, which a thermostatted run absorbs; a run that conserves energy
-  // (fix momentum, heat exchange, external forces, ...) is left undamped.
+  // changed); a run that conserves energy (fix momentum, heat exchange,
+  // external forces, ...) is left undamped.
 
   class ParasiticDamping {
    public:
     static constexpr double AUTO_STEPS = 1000.0;
 
+    explicit ParasiticDamping(AtomState &);
+
     // damp_time < 0: auto, 0: off; dt the time step; thermostats: fixes
-    // that thermostat this fix's atoms (forcing: one of them adds forces)
+    // that thermostat this fix's atoms (forcing: one of them adds forces).
+    // A run that may damp adds the state fields (before the fix's
+    // maxexchange is set)
     void init(double damp_time, double dt, bool thermostats, bool forcing);
     void impulse_here() { impulse = 1; }
     int take_impulse();    // this rank's impulse flag, cleared
@@ -50,15 +68,44 @@ namespace PEJump {
     bool automatic_on() const { return automatic && on; }
     double beta(double h) const;
 
+    // the state fields: h <F> and P of the last step per atom (nullptr
+    // before a run that may damp), valid if has_history(): the last step
+    // was damped (NaN for an atom created since); set_history(false) when
+    // the scheme restarts. allocate(): add them (restart files that hold
+    // them)
+    double **impulses() const;
+    double **differences() const;
+    void allocate();
+    bool allocated() const { return impulse_field >= 0; }
+
+    // one component of a damped step: jmp holds [v]^n, d = 2 h <F>/m of
+    // this step, dlast = 2 h <F>/m of the last step and plast its P (NaN
+    // if there are none: 2 [v]^n and -P^n stand in). On return p holds P^n
+    // and jmp the value from which TwoStep::jump_component(d, ...) gives
+    // the jump of the damped step
+    static void component(double beta, double d, double dlast, double plast, double &jmp,
+                          double &p)
+    {
+      if (!std::isfinite(dlast)) dlast = 2.0 * jmp;
+      p = jmp - 0.25 * (dlast + d);
+      if (!std::isfinite(plast)) plast = -p;
+      jmp -= 0.25 * beta * (3.0 * p - plast);
+    }
+
     // whether velocities were changed by another fix beside a thermostat
     // since the fix was defined: damp auto goes on damping in the next run
-    // (split runs and restarts continue as one run)
+    // (split runs and restarts continue as one run); and whether the last
+    // step was damped (the values it kept are valid)
     bool kicked() const { return ever_changed; }
     void set_kicked(bool flag) { ever_changed = flag; }
+    bool has_history() const { return history; }
+    void set_history(bool flag) { history = flag && allocated(); }
 
    private:
+    AtomState &state;
+    int impulse_field = -1, difference_field = -1;    // state fields, -1 until allocate()
     bool automatic = true, on = false, thermostatted = false;
-    bool ever_changed = false;
+    bool ever_changed = false, history = false;
     double rate = 0.0;
     int impulse = 0;
   };
