@@ -580,6 +580,11 @@ void FixPEJump::final_integrate()
   double **favg = direct ? atom->f : fsum();
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
+  if (scheme->fresh) {
+    // (a Lobatto rule's sampled force at the end node is its next start node)
+    double **fp = rule->has_end_nodes() ? scheme->fstart() : (split_primary() ? fsample() : atom->f);
+    start_new_atoms(fp, rest);
+  }
   double mag[2] = {0.0, 0.0};
   opened_ahead = may_open_ahead();
   if (opened_ahead)
@@ -1076,16 +1081,42 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
 }
 
 /* ----------------------------------------------------------------------
-   an atom created during the simulation (fix deposit, create_atoms) starts
-   with its velocity (node and free-flight velocity) and no jump; its
-   start-node force is taken at its first force evaluation (NaN until then)
+   an atom created during the simulation (fix deposit, create_atoms) has no
+   jump yet (NaN until start_new_atoms() gives it one); its start-node force
+   is taken at its first force evaluation (NaN until then)
 ------------------------------------------------------------------------- */
 
 void FixPEJump::set_arrays(int i)
 {
   state->reset(i);
   scheme->mark(i);
+  for (int k = 0; k < 3; k++) scheme->jump()[i][k] = std::numeric_limits<double>::quiet_NaN();
   scheme->fresh = 1;
+}
+
+/* ----------------------------------------------------------------------
+   atoms created inside this step (fix deposit inserts them after
+   initial_integrate, at the step end, their velocity taken as the half-step
+   velocity, as fix nve does) start as the scheme starts with init kick:
+   their jump is h F/m with the force fp the rule takes at the primary node,
+   so that the jump relation gives them fix nve's half kick, and they stay
+   at their insertion point while the others move on by rest
+------------------------------------------------------------------------- */
+
+void FixPEJump::start_new_atoms(double **fp, double rest)
+{
+  double **x = atom->x;
+  double **v = atom->v;
+  double **jump = scheme->jump();
+  const double kick = h_step * force->ftm2v;
+  for_atoms([&](int i) {
+    if (!std::isnan(jump[i][0])) return;
+    const double dtfm = kick * scheme->inverse_mass_of(i);
+    for (int k = 0; k < 3; k++) {
+      jump[i][k] = dtfm * fp[i][k];
+      x[i][k] -= rest * v[i][k];
+    }
+  });
 }
 
 /* ---------------------------------------------------------------------- */

@@ -130,6 +130,7 @@ class FixPEJump : public Fix {
   PEJump::FreeFlight free_flight() const;    // the atoms' v^{n+1/2} inside the step
   void store_start_node();                   // Lobatto start-node forces at q^0
   void refresh_start_nodes();
+  void start_new_atoms(double **fp, double rest);    // created inside this step
   void primary_sampled_force();
   void project_sampled();
   void quadrature_sum();

@@ -661,6 +661,49 @@ TEST(PEJumpOtherFixes, DepositedAtomsKeepTheirVelocity)
 }
 
 /* ----------------------------------------------------------------------
+   an atom that fix deposit inserts where a force acts starts as with fix
+   nve: LAMMPS inserts it after initial_integrate, at the step end, with
+   its velocity as the half-step velocity, and fix nve gives it half a
+   kick there. The fix starts its jump with the kick h F/m of its force
+   there, and the midpoint rule leaves it at its insertion point. Before,
+   the atom started without a jump: lobatto 2 gave it a whole kick (vz
+   0.02 off here, 1.4e-3 in z after 30 steps) and midpoint moved it h v/2
+   on from its insertion point (1.25e-3)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, DepositedAtomsStartAsWithNve)
+{
+  // z and vz of the deposited atom after its insertion step (the first
+  // step of the run), and z 30 steps later
+  const auto run = [](const std::string &integrator) {
+    Sim s;
+    s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p f",
+            "region box block 0 10 0 10 0 20", "create_box 2 box", "mass * 1.0",
+            "create_atoms 2 single 5 5 10", "group mobile type 1", "pair_style lj/cut 2.5",
+            "pair_coeff * * 1.0 1.0 2.5", "region slab block 4.9 5.1 4.9 5.1 11.03 11.07",
+            "fix 1 mobile " + integrator,
+            "fix 2 mobile deposit 1 1 100 12345 region slab vz -0.5 -0.5", "timestep 0.005",
+            "thermo 0", "run 1 post no"});
+    EXPECT_EQ(s.lmp->atom->natoms, 2) << integrator;
+    std::vector<double> out = {s.x(2, 2), s.v(2, 2)};
+    s.cmd("run 30 post no");
+    out.push_back(s.x(2, 2));
+    return out;
+  };
+  const auto nve = run("nve");
+  EXPECT_GT(std::fabs(nve[1] + 0.5), 0.01) << "the force acts at the insertion point";
+  for (const std::string &rule : ALL_RULES) {
+    const auto pj = run("pe_jump quadrature " + rule);
+    // midpoint and lobatto 2 take the force at the insertion point for
+    // the kick, as fix nve; the other rules average it over the step
+    const bool one_node = (rule == "midpoint") || (rule == "lobatto 2");
+    EXPECT_NEAR(pj[0], nve[0], 1e-12) << rule << ": z after the insertion step";
+    EXPECT_NEAR(pj[1], nve[1], one_node ? 1e-12 : 5e-3) << rule << ": vz after it";
+    EXPECT_NEAR(pj[2], nve[2], (rule == "lobatto 2") ? 1e-10 : 2e-4) << rule << ": z 30 steps later";
+  }
+}
+
+/* ----------------------------------------------------------------------
    other time integrators and a second fix pe_jump: refused where their
    atoms interact with this fix's atoms at mixed times, correct otherwise
 ------------------------------------------------------------------------- */
