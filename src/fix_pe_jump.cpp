@@ -267,6 +267,11 @@ void FixPEJump::min_setup(int /*vflag*/)
 
 void FixPEJump::setup(int /*vflag*/)
 {
+  // where the input decides, other integrators are refused here, before
+  // the first step: dynamic groups are up to date now (not yet at init),
+  // and atoms inserted during the run would be seen only when they arrive
+  others->refuse_shared_atoms();
+  others->refuse_inserted_atoms(rule->name(), !rule->only_end_nodes());
   state->ensure(atom->nlocal);
   grow_work();
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&

@@ -16,10 +16,12 @@
 #include "atom.h"
 #include "comm.h"
 #include "error.h"
+#include "force.h"
 #include "modify.h"
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "output.h"
+#include "pair.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_step_variables.h"
 #include "update.h"
@@ -215,6 +217,112 @@ void OtherFixes::refuse_shared_atoms() const
                  "are integrated by fix {} ({}) too. Give the two fixes separate groups",
                  self->style, shared, ifix->id, ifix->style);
   }
+}
+
+/* ----------------------------------------------------------------------
+   atoms inserted during the run start on no list: the check at setup and
+   after each list build (refuse_interactions()) sees them only once they
+   meet the atoms of the other set, which can be late in the run (LAMMPS'
+   deposit example with fix nve on the deposited atoms and quadrature
+   lobatto 3 on the substrate: step 400), and two integrators of one
+   inserted atom were never seen in the run. Where the input decides,
+   refuse here
+------------------------------------------------------------------------- */
+
+void OtherFixes::refuse_inserted_atoms(const std::string &rule_name, bool interior) const
+{
+  std::vector<Fix *> inserters, integrators;
+  for (auto *ifix : modify->get_fix_list()) {
+    if (ifix == self) continue;
+    if (inserted_bits(ifix)) inserters.push_back(ifix);
+    if (ifix->time_integrate) integrators.push_back(ifix);
+  }
+  if (inserters.empty() || integrators.empty()) return;
+
+  // the atoms of this fix (0) and of each other integrator (1, 2, ...) now,
+  // and the group bits that gain atoms during the run
+  const int nsets = static_cast<int>(integrators.size()) + 1;
+  const auto bit_of = [&](int set) {
+    return set ? integrators[set - 1]->groupbit : self->groupbit;
+  };
+  std::vector<bigint> local(nsets, 0), present(nsets, 0);
+  const int *mask = atom->mask;
+  for (int i = 0; i < atom->nlocal; i++)
+    for (int set = 0; set < nsets; set++)
+      if (mask[i] & bit_of(set)) ++local[set];
+  MPI_Allreduce(local.data(), present.data(), nsets, MPI_LMP_BIGINT, MPI_SUM, world);
+  int gaining = 0;
+  for (auto *ifix : inserters) gaining |= inserted_bits(ifix);
+  const auto populated = [&](int set) {
+    return (present[set] > 0) || (gaining & bit_of(set));
+  };
+  // the pair lists join any two atoms that come close
+  const bool pairs = force->pair && (force->pair->cutforce > 0.0);
+
+  for (auto *ifix : inserters) {
+    const int bits = inserted_bits(ifix);
+    const bool mine = (bits & self->groupbit) != 0;
+    for (int set = 1; set < nsets; set++) {
+      const Fix *other = integrators[set - 1];
+      const bool theirs = (bits & other->groupbit) != 0;
+      if (mine && theirs)
+        error->all(FLERR,
+                   "Fix {} must be the only time integration fix acting on its atoms: fix {} "
+                   "({}) inserts atoms into its group and into that of fix {} ({}). Give the "
+                   "two fixes separate groups",
+                   self->style, ifix->id, ifix->style, other->id, other->style);
+      if (!interior || !pairs) continue;
+      if (theirs && populated(0) && !may_be_excluded(bits))
+        error->all(FLERR,
+                   "Fix {} with quadrature {} evaluates forces inside the step, but fix {} ({}) "
+                   "inserts atoms that fix {} ({}) integrates and that will interact with this "
+                   "fix's atoms: the forces between them would mix times. Use quadrature "
+                   "lobatto 2, or let fix {} insert into the group of this fix",
+                   self->style, rule_name, ifix->id, ifix->style, other->id, other->style,
+                   ifix->id);
+      if (mine && populated(set) && !may_be_excluded(bits))
+        error->all(FLERR,
+                   "Fix {} with quadrature {} evaluates forces inside the step, but fix {} ({}) "
+                   "inserts atoms into its group that will interact with the atoms of fix {} "
+                   "({}): the forces between them would mix times. Use quadrature lobatto 2, or "
+                   "integrate all interacting atoms with one fix {}",
+                   self->style, rule_name, ifix->id, ifix->style, other->id, other->style,
+                   self->style);
+    }
+  }
+}
+
+/* ----------------------------------------------------------------------
+   pairs of atoms inserted with the group bits a that neigh_modify exclude
+   may leave out of the lists: by type or molecule (the inserting fix
+   keeps the types and molecules it inserts to itself) or by a group of
+   theirs (which may hold the other set). The check at the list builds
+   decides then
+------------------------------------------------------------------------- */
+
+bool OtherFixes::may_be_excluded(int a) const
+{
+  if (!neighbor->exclude) return false;
+  if ((neighbor->nex_type > 0) || (neighbor->nex_mol > 0)) return true;
+  for (int k = 0; k < neighbor->nex_group; k++)
+    if ((a & neighbor->ex1_bit[k]) || (a & neighbor->ex2_bit[k])) return true;
+  return false;
+}
+
+/* ----------------------------------------------------------------------
+   atoms that fixes insert during a run get the group bits of "all" and
+   the fix group (deposit, pour, bond/react; gcmc and charge/regulation
+   also those of their group keywords, which they keep to themselves),
+   those of append/atoms the bit of "all" only. (fix widom deletes its
+   test atoms in the step it inserts them)
+------------------------------------------------------------------------- */
+
+int OtherFixes::inserted_bits(const Fix *fix)
+{
+  if (style_is(fix, {"^deposit", "^pour", "^gcmc", "^charge/regulation", "^bond/react"}))
+    return 1 | fix->groupbit;
+  if (style_is(fix, {"^append/atoms"})) return 1;
+  return 0;
 }
 
 /* ----------------------------------------------------------------------

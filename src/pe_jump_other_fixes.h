@@ -85,10 +85,22 @@ namespace PEJump {
     void warn_energy_inside_step(const std::string &rule_name, bool primary_at_end) const;
 
     // an error if atoms of this fix are integrated by another fix too
-    // (collective; at init)
+    // (collective; at init, and at setup, where LAMMPS has brought the
+    // dynamic groups up to date)
     void refuse_shared_atoms() const;
 
+    // atoms that other fixes insert during the run (fix deposit, ...):
+    // refused at setup if another time integrator will integrate them too,
+    // or, with a rule that evaluates forces inside the step (interior),
+    // if they will interact with atoms of another time integrator, which
+    // refuse_interactions() would see only when the first of them arrive
+    // (collective)
+    void refuse_inserted_atoms(const std::string &rule_name, bool interior) const;
+
     static bool steps_own_clock(const class Fix *);
+    // the group bits of the atoms that a fix inserts during a run (0 if it
+    // inserts none)
+    static int inserted_bits(const Fix *);
     static bool replaces_forces(const Fix *);
     static bool reads_only(const Fix *);
     // the fix's style matches one of the patterns (utils::strmatch)
@@ -102,6 +114,9 @@ namespace PEJump {
     // the refusals of rules whose force evaluation of the MD step lies
     // inside the step
     void refuse_inside_step(Fix *, const std::string &rule_name) const;
+    // true if neigh_modify exclude may leave pairs of atoms inserted with
+    // the group bits a out of the pair lists
+    bool may_be_excluded(int a) const;
     int nadders;         // fixes that add forces
     int nthermostats;    // fixes that thermostat (see thermostats())
     int nforcing;        // those of them that add forces

@@ -98,7 +98,8 @@ TEST(PEJumpLammpsExamples, DepositWithTwoIntegrators)
   // fixes: with fix pe_jump both take lobatto 2 (forces at the step ends)
   const auto count = [](const std::string &integrator) {
     Sim s;
-    s.cmds({"variable integrator string \"" + integrator + "\"", "log none"});
+    s.cmds({"variable integrator string \"" + integrator + "\"",
+            "variable deposited string \"" + integrator + "\"", "log none"});
     s.lmp->input->file((std::string(PEJUMP_INPUTS) + "/in.deposit").c_str());
     double zmax_new = -1e300;
     for (int i = 0; i < s.lmp->atom->nlocal; i++)
@@ -111,4 +112,43 @@ TEST(PEJumpLammpsExamples, DepositWithTwoIntegrators)
   // the highest deposited atom falls as with fix nve
   EXPECT_NEAR(pj.second, nve.second, 1e-6);
   EXPECT_THROW(count("pe_jump"), LAMMPS_NS::LAMMPSException);
+}
+
+/* ----------------------------------------------------------------------
+   the example as a user swaps fix nve of the substrate (fix 3) only: the
+   deposited atoms stay with fix nve (fix 1), and they will interact with
+   the substrate, which a rule with nodes inside the step cannot take.
+   Refused at setup, before the first step (it stopped at step 400, where
+   the first deposited atom reached the substrate); lobatto 2 runs to the
+   end and deposits the atoms of fix nve
+------------------------------------------------------------------------- */
+
+TEST(PEJumpLammpsExamples, DepositBesideAnotherIntegratorIsRefusedAtSetup)
+{
+  const auto run = [](const std::string &rule, std::string &error) {
+    Sim s;
+    s.cmds({"variable integrator string \"pe_jump quadrature " + rule + "\"",
+            "variable deposited string nve", "log none"});
+    try {
+      s.lmp->input->file((std::string(PEJUMP_INPUTS) + "/in.deposit").c_str());
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      error = e.what();
+    }
+    return std::make_pair(s.lmp->update->ntimestep, s.lmp->atom->natoms);
+  };
+  // (midpoint and Legendre rules are refused at init beside fix 5, wall/reflect)
+  for (const std::string rule : {"lobatto 3", "lobatto 5", "auto 1e-6"}) {
+    std::string error;
+    EXPECT_EQ(run(rule, error).first, 0) << rule;
+    EXPECT_THAT(error,
+                ::testing::ContainsRegex("fix 4 \\(deposit\\) inserts atoms that fix 1 \\(nve\\) "
+                                         "integrates and that will interact with this fix's "
+                                         "atoms.*Use quadrature lobatto 2"))
+        << rule;
+  }
+  std::string error;
+  const auto end = run("lobatto 2", error);
+  EXPECT_EQ(error, "");
+  EXPECT_EQ(end.first, 600);
+  EXPECT_EQ(end.second, 356);    // 350 atoms of the substrate, 6 deposited
 }

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <regex>
 #include <string>
 #include <utility>
@@ -740,6 +741,112 @@ TEST(PEJumpOtherFixes, OtherIntegratorsOnSeparateAtomsAreAllowed)
           "pair_style lj/cut 2.5", "pair_coeff * * 1.0 1.0 2.5", "neigh_modify exclude type 1 2",
           "fix 1 c1 nve", "fix 2 c2 pe_jump quadrature lobatto 3", "timestep 0.005", "thermo 0"});
   EXPECT_NO_THROW(s.cmd("run 50 post no"));
+}
+
+/* ----------------------------------------------------------------------
+   where the input decides that atoms of another time integrator will
+   interact with this fix's atoms (fix deposit inserting into a group that
+   another integrator moves, or into this fix's group beside another
+   integrator), or that two integrators will integrate the same atoms
+   (inserted atoms in both groups, a dynamic group, whose atoms LAMMPS
+   assigns only at setup), the run is refused at setup, before its first
+   step. Before, the interaction was refused when the first deposited atom
+   reached the substrate (step 625 here), and shared atoms went unseen
+   until the next run
+------------------------------------------------------------------------- */
+
+namespace {
+// a substrate (type 1) onto which fix dep deposits atoms of type 2 (group
+// addatoms) every 50 steps, falling at unit speed
+void deposition(Sim &s)
+{
+  s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "boundary p p m",
+          "lattice fcc 1.0", "region box block 0 3 0 3 0 8", "create_box 2 box",
+          "region substrate block INF INF INF INF INF 2", "create_atoms 1 region substrate",
+          "pair_style lj/cut 2.5", "pair_coeff * * 1.0 1.0", "mass * 1.0", "neigh_modify delay 0",
+          "group addatoms type 2", "group substrate type 1", "region slab block 0 3 0 3 6 7",
+          "fix dep addatoms deposit 20 2 50 12345 region slab near 1.0 vz -1.0 -1.0",
+          "timestep 0.005", "thermo 0"});
+}
+
+struct Outcome {
+  std::string error;
+  LAMMPS_NS::bigint step;
+};
+
+Outcome outcome_of(const std::function<void(Sim &)> &system, const std::vector<std::string> &cmds)
+{
+  Sim s;
+  system(s);
+  try {
+    s.cmds(cmds);
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    return {e.what(), s.lmp->update->ntimestep};
+  }
+  return {"no error", s.lmp->update->ntimestep};
+}
+}    // namespace
+
+TEST(PEJumpOtherFixes, InsertedAndDynamicGroupAtomsAreRefusedAtSetup)
+{
+  struct Case {
+    std::function<void(Sim &)> system;
+    std::vector<std::string> cmds;
+    std::string error;    // "" if the run goes through
+  };
+  const auto liquid = [](Sim &s) {
+    lj_liquid(s, 3);
+    s.cmds({"timestep 0.005", "thermo 0"});
+  };
+  const std::vector<Case> cases = {
+      // the deposited atoms with fix nve, the substrate with pe_jump
+      {deposition,
+       {"fix 1 addatoms nve", "fix 2 substrate pe_jump quadrature lobatto 3", "run 1500"},
+       "fix dep \\(deposit\\) inserts atoms that fix 1 \\(nve\\) integrates and that will "
+       "interact with this fix's atoms"},
+      // the deposited atoms with pe_jump, the substrate with fix nve
+      {deposition,
+       {"fix 1 addatoms pe_jump", "fix 2 substrate nve", "run 1500"},
+       "fix dep \\(deposit\\) inserts atoms into its group that will interact with the atoms "
+       "of fix 2 \\(nve\\)"},
+      // both integrate the deposited atoms (lobatto 2 too)
+      {deposition,
+       {"fix 1 all pe_jump quadrature lobatto 2", "fix 2 addatoms nve", "run 200"},
+       "must be the only time integration fix acting on its atoms: fix dep \\(deposit\\) "
+       "inserts atoms into its group and into that of fix 2 \\(nve\\)"},
+      // a dynamic group of fix nve inside the group of fix pe_jump
+      {liquid,
+       {"variable l atom x<2", "group g dynamic all var l every 5",
+        "fix 1 all pe_jump quadrature lobatto 2", "fix 2 g nve", "run 20"},
+       "must be the only time integration fix acting on its atoms: [0-9]+ of them are "
+       "integrated by fix 2 \\(nve\\)"},
+      // lobatto 2 takes other integrators' atoms (forces at the step ends)
+      {deposition,
+       {"fix 1 addatoms nve", "fix 2 substrate pe_jump quadrature lobatto 2", "run 1500"},
+       ""},
+      {deposition,
+       {"fix 1 addatoms pe_jump quadrature lobatto 2", "fix 2 substrate nve", "run 1500"},
+       ""},
+      // inserted into the group of this fix, one integrator
+      {deposition, {"fix 1 all pe_jump quadrature lobatto 3", "run 1500"}, ""},
+      // kept apart by neigh_modify exclude: not refused
+      {deposition,
+       {"neigh_modify exclude type 1 2", "fix 1 addatoms nve",
+        "fix 2 substrate pe_jump quadrature lobatto 3", "run 1500"},
+       ""},
+      {deposition,
+       {"neigh_modify exclude group addatoms substrate", "fix 1 addatoms nve",
+        "fix 2 substrate pe_jump quadrature lobatto 3", "run 1500"},
+       ""}};
+  for (const auto &c : cases) {
+    const auto [error, step] = outcome_of(c.system, c.cmds);
+    if (c.error.empty()) {
+      EXPECT_EQ(error, "no error") << c.cmds[c.cmds.size() - 2];
+      continue;
+    }
+    EXPECT_THAT(error, ContainsRegex(c.error)) << c.cmds[c.cmds.size() - 2];
+    EXPECT_EQ(step, 0) << c.cmds[c.cmds.size() - 2] << ": " << error;
+  }
 }
 
 /* ----------------------------------------------------------------------
