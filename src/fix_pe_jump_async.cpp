@@ -314,6 +314,17 @@ void FixPEJumpAsync::refuse_other_fixes() const
                  "forces: a slow atom's fine and coarse forces are sampled apart. Hold atoms by "
                  "leaving them out of the fix group (frozen scenery), or use fix pe_jump",
                  ifix->id, ifix->style);
+
+  // the velocity changes of fixes made for them would be refused at their
+  // first action (refuse_velocity_changes()), which may come late in the
+  // run (fix momentum 100: step 101)
+  for (const auto &ifix : modify->get_fix_list())
+    if ((ifix != this) && OtherFixes::changes_velocities(ifix))
+      error->all(FLERR,
+                 "Fix pe_jump/async cannot yet be combined with fix {} ({}), which changes "
+                 "velocities during the run: pe_jump/async does not take velocity changes yet. "
+                 "Use fix pe_jump",
+                 ifix->id, ifix->style);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -350,9 +361,9 @@ void FixPEJumpAsync::refuse_velocity_changes()
   MPI_Allreduce(&changes_seen, &any, 1, MPI_INT, MPI_MAX, world);
   if (any)
     error->all(FLERR,
-               "Fix pe_jump/async: another fix (a thermostat, fix momentum, fix wall/reflect, "
-               "...) changed velocities during the run before step {}; pe_jump/async does not "
-               "take velocity changes yet. Use fix pe_jump",
+               "Fix pe_jump/async: another fix (fix wall/reflect, fix oneway, ...) changed "
+               "velocities during the run before step {}; pe_jump/async does not take velocity "
+               "changes yet. Use fix pe_jump",
                update->ntimestep);
 }
 

@@ -349,6 +349,21 @@ bool OtherFixes::reads_only(const Fix *fix)
 }
 
 /* ----------------------------------------------------------------------
+   fixes whose purpose is to change velocities during a run: thermostats
+   that rescale or replace them, which report the energy they exchange
+   (temp/berendsen, temp/rescale, temp/csvr, temp/csld), fix momentum, and
+   the exchanges of heat or momentum (heat, ehex, thermal/conductivity,
+   viscosity)
+------------------------------------------------------------------------- */
+
+bool OtherFixes::changes_velocities(const Fix *fix)
+{
+  return (fix->ecouple_flag && !fix->time_integrate) ||
+      style_is(fix,
+               {"^temp/", "^momentum", "^heat", "^ehex", "^thermal/conductivity", "^viscosity"});
+}
+
+/* ----------------------------------------------------------------------
    fixes that set, average or project the forces instead of adding to them
 ------------------------------------------------------------------------- */
 

@@ -102,6 +102,9 @@ namespace PEJump {
     // inserts none)
     static int inserted_bits(const Fix *);
     static bool replaces_forces(const Fix *);
+    // fixes made to change velocities during a run: thermostats that
+    // rescale or replace them, fix momentum, heat and momentum exchanges
+    static bool changes_velocities(const Fix *);
     static bool reads_only(const Fix *);
     // the fix's style matches one of the patterns (utils::strmatch)
     static bool style_is(const Fix *, std::initializer_list<const char *> patterns);

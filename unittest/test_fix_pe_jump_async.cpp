@@ -951,7 +951,12 @@ TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused)
 
 /* ----------------------------------------------------------------------
    velocities changed by other fixes during a run are refused (fix pe_jump
-   takes them as impulses); output fixes at the end of a step are fine
+   takes them as impulses); output fixes at the end of a step are fine.
+   Fixes made to change velocities (thermostats that rescale them, fix
+   momentum, heat and momentum exchanges) are refused at setup, before the
+   first step: before, at the first coarse node after their first action
+   (temp/berendsen: step 6; fix momentum 100: step 101, and not at all in
+   a run of 50 steps)
 ------------------------------------------------------------------------- */
 
 TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused)
@@ -966,12 +971,22 @@ TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused)
   EXPECT_NO_THROW(run_with("fix 2 all ave/time 1 10 10 c_thermo_temp"));
   for (const std::string other :
        {"fix 2 all temp/berendsen 1.0 1.0 0.1", "fix 2 all momentum 1 linear 1 1 1",
-        "fix 2 all temp/rescale 7 1.0 1.0 0.01 1.0"}) {
+        "fix 2 all temp/rescale 7 1.0 1.0 0.01 1.0", "fix 2 all temp/csvr 1.0 1.0 0.1 5533",
+        "fix 2 all momentum 100 linear 1 1 1", "fix 2 all heat 10 0.1",
+        "fix 2 all viscosity 50 x z 10", "fix 2 all thermal/conductivity 50 z 10"}) {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds({"region f block 0 1 INF INF INF INF", "group fast region f",
+            "fix 1 all pe_jump/async 5 fast", other, "timestep 0.004", "thermo 0"});
     try {
-      run_with(other);
+      s.cmd("run 50 post no");
       ADD_FAILURE() << other << " was not refused";
     } catch (LAMMPS_NS::LAMMPSException &e) {
-      EXPECT_THAT(e.what(), ContainsRegex("changed velocities during the run")) << other;
+      EXPECT_THAT(e.what(),
+                  ContainsRegex("cannot yet be combined with fix 2 \\(.*\\), which "
+                                "changes velocities during the run"))
+          << other;
+      EXPECT_EQ(s.lmp->update->ntimestep, 0) << other;
     }
   }
 }
