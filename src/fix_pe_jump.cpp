@@ -285,7 +285,8 @@ void FixPEJump::setup(int /*vflag*/)
   nodes->ask_energy_at(update->laststep);    // for the next run to compare
   const int change = scheme->started ? scheme->velocity_change(group_atoms(), true) : 0;
   const double pe = steps->adapts() ? potential_now() : 0.0;
-  if (!scheme->started || (change == 2)) steps->first_step(style, group_atoms(), atom->f, pe);
+  if ((!scheme->started || (change == 2)) && !scheme->reading_snapshots())
+    steps->first_step(style, group_atoms(), atom->f, pe);
   if (!scheme->started)
     start_scheme(nullptr, true);
   else if (change == 2)
@@ -300,7 +301,7 @@ void FixPEJump::setup(int /*vflag*/)
   scheme->fresh = 0;
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pe + scheme->energies(group_atoms())[0]);
-  if (damping->automatic_on()) note_damping(false);
+  if (damping->automatic_on() && !scheme->reading_snapshots()) note_damping(false);
   if (automatic) automatic->start_run(*nodes, opts.sample_mask);
 }
 

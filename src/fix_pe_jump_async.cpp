@@ -610,7 +610,8 @@ void FixPEJumpAsync::warn_output_between_nodes() const
 {
   const bigint k = clocks->steps();
   const bigint slow = slow_total();    // (all on the fine clock: no warning)
-  if ((comm->me != 0) || (k <= 1) || (slow == 0)) return;
+  // (a rerun integrates nothing: its snapshots are states of their own)
+  if ((comm->me != 0) || (k <= 1) || (slow == 0) || scheme->reading_snapshots()) return;
   const bigint now = update->ntimestep, last = update->laststep;
   const bigint node = now - clocks->done();    // the last coarse node
   const auto between = [&](bigint step) {
@@ -983,7 +984,8 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   catch_up_all();
   if (with_start) {
-    if (!clocks->at_coarse_node()) hand_over_impulses("the two-step scheme restarts");
+    if (!clocks->at_coarse_node() && !scheme->reading_snapshots())
+      hand_over_impulses("the two-step scheme restarts");
     clocks->begin_coarse();
     double **facc = state->vec(FACC);
     for (int i = 0; i < atom->nlocal; i++)

@@ -18,11 +18,13 @@
 #include "domain.h"
 #include "error.h"
 #include "force.h"
+#include "input.h"
 #include "pe_jump_atom_state.h"
 #include "update.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
@@ -103,6 +105,7 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
 {
   int all_started = 0;
   MPI_Allreduce(&started, &all_started, 1, MPI_INT, MPI_MIN, world);
+  if (reading_snapshots()) all_started = 0;
   if ((all_started < 0) && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: the per-atom state in the restart file does not fit this fix "
@@ -148,6 +151,18 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
                "on top of each other, or a force field that diverges where they are)",
                style, all_bad);
   started = (all_started > 0) ? 1 : 0;
+}
+
+/* ----------------------------------------------------------------------
+   the snapshots of a rerun are unrelated states: the log would say at
+   each that the velocities changed (and the restart of a new start
+   inside a coarse step of pe_jump/async would hand stale impulses to the
+   velocities read)
+------------------------------------------------------------------------- */
+
+bool TwoStep::reading_snapshots() const
+{
+  return input->command && (strcmp(input->command, "rerun") == 0);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -61,8 +61,13 @@ namespace PEJump {
     // non-finite velocities are refused
     // new_step_restarts: a time step changed since the last run restarts
     // the scheme too (unless the jumps are to be carried over)
+    // (during a rerun not started: see reading_snapshots())
     void agree_on_started(const AtomSet &, const char *style, bool new_step_restarts,
                           const NodeSampler::Tallied &now);
+    // true while the rerun command reads snapshots: it calls setup() for
+    // each and integrates nothing, so every snapshot starts the scheme
+    // afresh from its positions and velocities, without a word
+    bool reading_snapshots() const;
     // the end of a run: the fingerprints of the velocities and the census
     // of the group (atoms, positions, masses, time step, the potential
     // energy tallied at the end), for the next run to compare

@@ -21,6 +21,7 @@
 
 using namespace PEJumpTest;
 using ::testing::ContainsRegex;
+using ::testing::Not;
 
 namespace {
 
@@ -524,4 +525,54 @@ TEST(PEJumpHostile, CheckpointsBetweenRunsWithPreNoContinueExactly)
   }
   std::remove("pe_jump_checkpoint.data");
   std::remove("pe_jump_checkpoint.restart");
+}
+
+/* ----------------------------------------------------------------------
+   rerun reads a snapshot and calls setup() for each, integrating
+   nothing: each snapshot starts the scheme afresh, without a word. The
+   log said "velocities were changed since the last run" at every snapshot
+   after the first, beside a thermostat also "damp auto damps ..." at
+   every one, and pe_jump/async warned of the thermo output at every one
+   and, after a run that ended inside a coarse step, of a restart there
+   (handing the stale impulses of that step to the velocities read). A run
+   after the rerun goes on from the last snapshot as a fix defined there
+------------------------------------------------------------------------- */
+
+TEST(PEJumpHostile, RerunStartsTheSchemeAtEachSnapshotWithoutAWord)
+{
+  const std::string dump = "pe_jump_rerun.dump";
+  {
+    Sim s;
+    lj_liquid(s, 3);
+    s.cmds({"fix 1 all nve", "timestep 0.005", "thermo 0",
+            "dump d all custom 10 " + dump + " id type x y z vx vy vz ix iy iz",
+            "dump_modify d format float %22.16g", "run 50 post no"});
+  }
+  const std::vector<std::string> fast = {"region f block 0 1 INF INF INF INF",
+                                         "group fast region f"};
+  for (const std::string fix : {"fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
+                                "fix 1 all pe_jump/async 5 fast"}) {
+    for (const std::string thermostat : {"", "fix 2 all langevin 1.0 1.0 0.5 4711"}) {
+      if (!thermostat.empty() && (fix.find("async") != std::string::npos)) continue;
+      Sim s(MPI_COMM_WORLD, false);
+      lj_liquid(s, 3);
+      s.cmds(fast);
+      s.cmds({fix, "timestep 0.005", "thermo 10"});
+      if (!thermostat.empty()) s.cmd(thermostat);
+      s.cmd("run 7 post no");    // a state of its own (pe_jump/async: inside a coarse step)
+      ::testing::internal::CaptureStdout();
+      s.cmd("rerun " + dump + " dump x y z vx vy vz ix iy iz");
+      const std::string out = ::testing::internal::GetCapturedStdout();
+      EXPECT_THAT(out, Not(ContainsRegex("Fix pe_jump|WARNING"))) << fix << " " << thermostat;
+      if (!thermostat.empty()) continue;
+      s.cmd("run 20 post no");
+      Sim fresh;
+      lj_liquid(fresh, 3);
+      fresh.cmds(fast);
+      fresh.cmds({"read_dump " + dump + " 50 x y z vx vy vz ix iy iz", fix, "timestep 0.005",
+                  "thermo 0", "run 20 post no"});
+      EXPECT_LT(max_diff(unwrapped_positions(s), unwrapped_positions(fresh)), 1e-12) << fix;
+    }
+  }
+  std::remove(dump.c_str());
 }
