@@ -147,7 +147,8 @@ double AutoQuadrature::defect(const AtomSet &set, const FreeFlight &v, double h,
 
 void AutoQuadrature::report(const char *style)
 {
-  if (comm->me == 0)
+  // (a run of 0 steps, or a rerun, integrated nothing)
+  if ((comm->me == 0) && (steps[0] + steps[1] + steps[2] > 0))
     utils::logmesg(lmp,
                    "Fix {} quadrature auto {}: steps with lobatto 2: {}, lobatto 3: {}, "
                    "lobatto 5: {}\n",

@@ -45,7 +45,8 @@ namespace PEJump {
     int sum(NodeSampler &, int mask, const AtomSet &, const FreeFlight &v, double h,
             double **fstart, double **fend, double **fsum);
 
-    void report(const char *style);    // post_run(): steps taken with each rule
+    // post_run(): steps taken with each rule (nothing if no step was taken)
+    void report(const char *style);
     double memory_usage() const { return 3.0 * sizeof(double) * nfnode; }
 
    private:

@@ -1592,6 +1592,33 @@ TEST(PEJump, QuadratureAutoKeepsTheStepDefectBelowTol)
 }
 
 /* ----------------------------------------------------------------------
+   quadrature auto tells at the end of a run how many steps took each
+   rule, for runs that took steps: not for run 0 (it printed "steps with
+   lobatto 2: 0, lobatto 3: 0, lobatto 5: 0")
+------------------------------------------------------------------------- */
+
+TEST(PEJump, QuadratureAutoReportsRunsThatTakeSteps)
+{
+  Sim s(MPI_COMM_WORLD, false);
+  lj_liquid(s, 3);
+  s.cmds({"fix 1 all pe_jump quadrature auto 1e-6", "timestep 0.005", "thermo 0"});
+  const auto log_of = [&](const std::string &command) {
+    ::testing::internal::CaptureStdout();
+    s.cmd(command);
+    return ::testing::internal::GetCapturedStdout();
+  };
+  EXPECT_THAT(log_of("run 0"), Not(ContainsRegex("quadrature auto")));
+  const std::string out = log_of("run 10");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      out, m,
+      std::regex("quadrature auto 1e-06: steps with lobatto 2: ([0-9]+), lobatto 3: ([0-9]+), "
+                 "lobatto 5: ([0-9]+)")));
+  EXPECT_EQ(std::stoi(m[1]) + std::stoi(m[2]) + std::stoi(m[3]), 10);
+  EXPECT_THAT(log_of("run 0"), Not(ContainsRegex("quadrature auto")));
+}
+
+/* ----------------------------------------------------------------------
    compensate: step-size changes no longer feed the parasitic mode, the
    pseudo-energy stays conserved, and the scheme stays second order
 ------------------------------------------------------------------------- */
