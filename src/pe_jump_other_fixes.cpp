@@ -94,7 +94,7 @@ void OtherFixes::sort(ForceSampler &sampler)
    field's energy is tallied (first order in the time step)
 ------------------------------------------------------------------------- */
 
-void OtherFixes::warn_energy_inside_step(const std::string &rule_name, bool primary_at_end) const
+void OtherFixes::warn_energy_inside_step(const std::string &rule_name, bool primary_at_end)
 {
   if (primary_at_end || (comm->me != 0)) return;
   const std::string fixes = named([](Fix *fix) {
@@ -102,12 +102,23 @@ void OtherFixes::warn_energy_inside_step(const std::string &rule_name, bool prim
         !replaces_forces(fix);
   });
   if (!fixes.empty())
-    error->warning(FLERR,
-                   "Fix {} with quadrature {}: the energy of {} (fix_modify energy yes) in pe, "
-                   "etotal and econserve is taken at the primary node inside the step, not at "
-                   "the step end: first order in the time step. The motion is second order; "
-                   "for the energy output use a Lobatto rule (e.g. quadrature lobatto 2)",
-                   self->style, rule_name, fixes);
+    warn_once(fmt::format("Fix {} with quadrature {}: the energy of {} (fix_modify energy yes) in "
+                          "pe, etotal and econserve is taken at the primary node inside the step, "
+                          "not at the step end: first order in the time step. The motion is "
+                          "second order; for the energy output use a Lobatto rule (e.g. "
+                          "quadrature lobatto 2)",
+                          self->style, rule_name, fixes));
+}
+
+/* ----------------------------------------------------------------------
+   a warning given at init would come again at every run with the same
+   settings (twice for run 0 followed by a run)
+------------------------------------------------------------------------- */
+
+void OtherFixes::warn_once(const std::string &text)
+{
+  if (!warned.insert(text).second) return;
+  error->warning(FLERR, text);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -421,7 +432,7 @@ std::string OtherFixes::reversing_fixes() const
 ------------------------------------------------------------------------- */
 
 void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_end,
-                                  bool only_end_nodes) const
+                                  bool only_end_nodes)
 {
   if (only_end_nodes || (comm->me != 0)) return;
   // (fix setforce and aveforce, which also act at every node, mostly hold
@@ -434,13 +445,13 @@ void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_
   if (fixes.empty()) return;
   const auto names = step_number_variables(lmp);
   if (names.empty()) return;
-  error->warning(FLERR,
-                 "Fix {}: variable(s) {} read the step number (step, elapsed, ramp(), "
-                 "vdisplace(), swiggle(), cwiggle()). Forces or parameters that {} may take "
-                 "from them are sampled by quadrature {} at nodes that see the step number of "
-                 "the step end: first order in the time step. Write such variables with time, "
-                 "which every node sees at its own time, or use quadrature lobatto 2",
-                 self->style, utils::join_words(names, ", "), fixes, rule_name);
+  warn_once(fmt::format("Fix {}: variable(s) {} read the step number (step, elapsed, ramp(), "
+                        "vdisplace(), swiggle(), cwiggle()). Forces or parameters that {} may "
+                        "take from them are sampled by quadrature {} at nodes that see the step "
+                        "number of the step end: first order in the time step. Write such "
+                        "variables with time, which every node sees at its own time, or use "
+                        "quadrature lobatto 2",
+                        self->style, utils::join_words(names, ", "), fixes, rule_name));
 }
 
 /* ----------------------------------------------------------------------

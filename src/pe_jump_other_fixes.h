@@ -18,6 +18,7 @@
 
 #include <functional>
 #include <initializer_list>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -72,17 +73,19 @@ namespace PEJump {
     // the fixes that reverse velocities (wall/reflect, oneway) for messages
     std::string reversing_fixes() const;
 
+    // (the two warnings below are given once per fix: a run that starts
+    // with the same settings does not repeat them)
+
     // a warning if fixes whose forces may follow variables of the step
     // number (fix adapt, addforce, indent, ...) sample them where the step
     // number is not the node's: at interior nodes (fixes acting at every
     // node), or inside the step (fixes adding an impulse at the primary
     // node). Variables of time follow the nodes.
-    void warn_step_number(const std::string &rule_name, bool primary_at_end,
-                          bool only_end_nodes) const;
+    void warn_step_number(const std::string &rule_name, bool primary_at_end, bool only_end_nodes);
 
     // a warning if fixes that add forces add their energy to pe (fix_modify
     // energy yes) and the rule takes their forces inside the step
-    void warn_energy_inside_step(const std::string &rule_name, bool primary_at_end) const;
+    void warn_energy_inside_step(const std::string &rule_name, bool primary_at_end);
 
     // an error if atoms of this fix are integrated by another fix too
     // (collective; at init, and at setup, where LAMMPS has brought the
@@ -126,6 +129,9 @@ namespace PEJump {
     int others_bits;     // group bits of the other time integrators
     int hooks;           // hooks of other fixes that may change velocities
     std::vector<int> end_of_step_every;
+    std::set<std::string> warned;    // the warnings given (rank 0)
+    // the warning text, unless it was given before
+    void warn_once(const std::string &text);
   };
 
 }    // namespace PEJump

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <iterator>
 #include <regex>
 #include <string>
 #include <utility>
@@ -243,6 +244,38 @@ TEST(PEJumpOtherFixes, ForceFieldOfTheStepNumberWarns)
     EXPECT_EQ(std::regex_search(out, std::regex("read the step number")), c.warns)
         << c.cmds.front() << " ... " << c.cmds.back();
   }
+}
+
+/* ----------------------------------------------------------------------
+   the warnings of variables of the step number and of fix energies taken
+   inside the step come once, not at every run with the same settings
+   (run 0 followed by a run printed each twice); a new setting (another
+   such fix and variable) warns again
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, SettingsWarningsComeOnce)
+{
+  Sim s(MPI_COMM_WORLD, false);
+  lj_liquid(s, 3);
+  s.cmds({"variable fx equal 1e-4*step", "fix 0 all addforce v_fx 0.0 0.0",
+          "fix_modify 0 energy yes", "fix 1 all pe_jump", "timestep 0.005", "thermo 0"});
+  const auto count = [](const std::string &text, const std::string &pattern) {
+    const std::regex re(pattern);
+    return std::distance(std::sregex_iterator(text.begin(), text.end(), re),
+                         std::sregex_iterator());
+  };
+  ::testing::internal::CaptureStdout();
+  s.cmds({"run 0", "run 10 post no", "run 10 post no"});
+  std::string out = ::testing::internal::GetCapturedStdout();
+  EXPECT_EQ(count(out, "variable\\(s\\) fx read the step number"), 1);
+  EXPECT_EQ(count(out, "the energy of fix 0 \\(addforce\\) \\(fix_modify energy yes\\)"), 1);
+  ::testing::internal::CaptureStdout();
+  s.cmds({"variable fy equal 1e-4*elapsed", "fix 2 all addforce 0.0 v_fy 0.0",
+          "fix_modify 2 energy yes", "run 0", "run 10 post no"});
+  out = ::testing::internal::GetCapturedStdout();
+  EXPECT_EQ(count(out, "read the step number"), 1);
+  EXPECT_EQ(count(out, "variable\\(s\\) fx, fy read the step number"), 1);
+  EXPECT_EQ(count(out, "the energy of fix 0 \\(addforce\\), fix 2 \\(addforce\\)"), 1);
 }
 
 /* ----------------------------------------------------------------------
