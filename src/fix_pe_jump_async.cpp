@@ -305,15 +305,32 @@ void FixPEJumpAsync::refuse_other_fixes() const
 
   // the fine and coarse forces of a slow atom are sampled apart, so another
   // fix cannot act on its total force; only fix enforce2d (which zeroes a
-  // component that is zero anyway) may act on the forces
-  for (const auto &ifix : modify->get_fix_list())
-    if ((ifix != this) && (ifix->setmask() & POST_FORCE) &&
-        !utils::strmatch(ifix->style, "^enforce2d"))
+  // component that is zero anyway) may act on the forces. The advice fits
+  // what the fix is for: atoms held by setforce and its kin can be left
+  // out of the fix group, an indenter or an added force cannot
+  for (const auto &ifix : modify->get_fix_list()) {
+    if ((ifix == this) || !(ifix->setmask() & POST_FORCE) ||
+        utils::strmatch(ifix->style, "^enforce2d"))
+      continue;
+    if (OtherFixes::replaces_forces(ifix))
       error->all(FLERR,
                  "Fix pe_jump/async cannot yet be combined with fix {} ({}), which acts on the "
                  "forces: a slow atom's fine and coarse forces are sampled apart. Hold atoms by "
                  "leaving them out of the fix group (frozen scenery), or use fix pe_jump",
                  ifix->id, ifix->style);
+    if (utils::strmatch(ifix->style, "^indent"))
+      error->all(FLERR,
+                 "Fix pe_jump/async cannot yet be combined with fix {} ({}): the indenter pushes "
+                 "atoms with a force that depends on their positions, which the split into fine "
+                 "and coarse forces (sampled at different nodes for a slow atom) cannot place. "
+                 "Use fix pe_jump, which takes the indenter's force as an impulse in every step",
+                 ifix->id, ifix->style);
+    error->all(FLERR,
+               "Fix pe_jump/async cannot yet be combined with fix {} ({}), which adds forces: "
+               "the split into fine and coarse forces (sampled at different nodes for a slow "
+               "atom) cannot place them. Use fix pe_jump, which takes such forces as impulses",
+               ifix->id, ifix->style);
+  }
 
   // the velocity changes of fixes made for them would be refused at their
   // first action (refuse_velocity_changes()), which may come late in the

@@ -27,6 +27,7 @@
 
 using namespace PEJumpTest;
 using ::testing::ContainsRegex;
+using ::testing::Not;
 
 namespace {
 
@@ -947,6 +948,36 @@ TEST(PEJumpAsync, UnsplittableForceFieldsAreRefused)
                              "delete_bonds all bond 1 remove special"}),
                        "run 2 post no"),
               ContainsRegex("no error"));
+}
+
+/* ----------------------------------------------------------------------
+   fixes that act on the forces are refused with advice that fits them:
+   atoms held by fix setforce can be left out of the fix group (frozen
+   scenery); an indenter cannot (it was advised to leave held atoms out of
+   the fix group), nor can a force that fix addforce adds
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, ForceFixesAreRefusedWithAdviceThatFits)
+{
+  const auto error_with = [](const std::string &other) {
+    return error_of({"units lj", "atom_style atomic", "lattice fcc 0.8442",
+                     "region box block 0 3 0 3 0 3", "create_box 1 box", "create_atoms 1 box",
+                     "mass 1 1.0", "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5",
+                     "region f block 0 1 INF INF INF INF", "group fast region f",
+                     "fix 1 all pe_jump/async 5 fast", other, "thermo 0"},
+                    "run 1");
+  };
+  EXPECT_THAT(error_with("fix 2 fast setforce 0.0 0.0 0.0"),
+              ContainsRegex("fix 2 \\(setforce\\).*Hold atoms by leaving them out of the fix "
+                            "group \\(frozen scenery\\), or use fix pe_jump"));
+  const std::string indent = error_with("fix 2 all indent 10.0 sphere 2.5 2.5 2.5 0.4");
+  EXPECT_THAT(indent,
+              ContainsRegex("fix 2 \\(indent\\): the indenter pushes atoms with a force "
+                            "that depends on their positions.*Use fix pe_jump"));
+  EXPECT_THAT(indent, Not(ContainsRegex("Hold atoms|out of the fix group")));
+  const std::string added = error_with("fix 2 all addforce 0.1 0.0 0.0");
+  EXPECT_THAT(added, ContainsRegex("fix 2 \\(addforce\\), which adds forces.*Use fix pe_jump"));
+  EXPECT_THAT(added, Not(ContainsRegex("Hold atoms|out of the fix group")));
 }
 
 /* ----------------------------------------------------------------------
