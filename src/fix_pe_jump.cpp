@@ -241,6 +241,7 @@ void FixPEJump::check_others_for_rule() const
   others->refuse_for_rule(rule->name(), primary_at_end, rule->only_end_nodes());
   others->warn_step_number(rule->name(), primary_at_end, rule->only_end_nodes());
   others->warn_energy_inside_step(rule->name(), primary_at_end);
+  others->warn_langevin_inside_step(rule->name(), primary_at_end);
   if (!primary_at_end)
     nodes->refuse_step_end_side_effects(
         style,

@@ -111,6 +111,27 @@ void OtherFixes::warn_energy_inside_step(const std::string &rule_name, bool prim
 }
 
 /* ----------------------------------------------------------------------
+   fix langevin's drag acts at the primary node with the velocity the
+   atoms fly with: inside the step (midpoint, odd Legendre rules) that is
+   an explicit Euler step of its Ornstein-Uhlenbeck process, whose
+   temperature is too high by the factor 1/(1 - gamma h/2) (velocity
+   Verlet splits the impulse about the node and has no such term)
+------------------------------------------------------------------------- */
+
+void OtherFixes::warn_langevin_inside_step(const std::string &rule_name, bool primary_at_end)
+{
+  if (primary_at_end || (comm->me != 0)) return;
+  const std::string fixes = named([](Fix *fix) {
+    return utils::strmatch(fix->style, "^langevin");
+  });
+  if (!fixes.empty())
+    warn_once(fmt::format("Fix {} with quadrature {}: {} acts at the centre of the step, where the "
+                          "mean temperature comes out high by the fraction dt/(2 damp) of its "
+                          "damping time; the Lobatto rules have no such term",
+                          self->style, rule_name, fixes));
+}
+
+/* ----------------------------------------------------------------------
    a warning given at init would come again at every run with the same
    settings (twice for run 0 followed by a run)
 ------------------------------------------------------------------------- */

@@ -82,6 +82,9 @@ namespace PEJump {
     // node), or inside the step (fixes adding an impulse at the primary
     // node). Variables of time follow the nodes.
     void warn_step_number(const std::string &rule_name, bool primary_at_end, bool only_end_nodes);
+    // a warning if fix langevin acts inside the step (its temperature is
+    // then high by gamma h/2)
+    void warn_langevin_inside_step(const std::string &rule_name, bool primary_at_end);
 
     // a warning if fixes that add forces add their energy to pe (fix_modify
     // energy yes) and the rule takes their forces inside the step
