@@ -8,7 +8,8 @@ means of the trajectory, not timings).
   python3 bench/thermostat/production.py --lmp build/lmp --label after
   python3 bench/thermostat/production.py --report [--labels before,after]
 
-Results: bench/results/thermostat/<label>.json; the report (markdown) goes
+--reanalyse reads the series files of an earlier run of the same label
+again instead of running. Results: bench/results/thermostat/<label>.json; the report (markdown) goes
 to stdout or --out FILE. Mean T and pe per atom are over the samples after
 the first 10 % of the run, with standard errors from 10 blocks."""
 import argparse
@@ -57,18 +58,23 @@ def run_one(args, system, thermostat, rule, work):
            "-nocite"]
     if system == "chain":
         cmd += ["-var", "data", os.path.join(args.lammps, "bench", "data.chain")]
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    done = subprocess.run(cmd, cwd=work, env=env, capture_output=True, text=True)
-    if done.returncode != 0:
-        return tag, {"error": (done.stdout + done.stderr)[-400:]}
+    if not args.reanalyse:
+        env = dict(os.environ, OMP_NUM_THREADS="1")
+        subprocess.run(cmd, cwd=work, env=env, capture_output=True, text=True)
+    # a run that stopped with an ERROR is analysed up to there
+    log = os.path.join(work, f"log.{tag}")
+    errors = [line.strip() for line in open(log) if line.startswith("ERROR")] \
+        if os.path.exists(log) else []
     s = np.loadtxt(os.path.join(work, f"series.{tag}.dat"), comments="#")
+    steps = int(s[-1, 0] - s[0, 0] + (s[1, 0] - s[0, 0]))    # sampled steps
     s = s[len(s) // 10:]
     t, pe, jump = s[:, 1], s[:, 2] / spec["natoms"], s[:, 3]
     n = max(1, len(jump) // 10)
     return tag, {"system": system, "thermostat": thermostat, "rule": rule,
                  "T": float(t.mean()), "T_se": block_error(t), "pe": float(pe.mean()),
                  "pe_se": block_error(pe), "jump_first": float(jump[:n].mean()),
-                 "jump_last": float(jump[-n:].mean()), "steps": args.steps}
+                 "jump_last": float(jump[-n:].mean()), "steps": steps,
+                 "error": errors[0] if errors else ""}
 
 
 def measure(args):
@@ -110,7 +116,8 @@ def report(args):
                 continue
             rel = "" if (not nve or r["rule"] == "nve") else \
                 f" ({100 * (r['T'] / nve['T'] - 1):+.2f} %)"
-            cells.append(f"{r['T']:.4f} +- {r['T_se']:.4f}{rel}")
+            stop = ", stopped by an ERROR" if r.get("error") else ""
+            cells.append(f"{r['T']:.4f} +- {r['T_se']:.4f}{rel} ({r['steps']} steps{stop})")
         last = data[labels[-1]].get(key, {})
         jumps = "-" if last.get("rule", "nve") == "nve" or "T" not in last else \
             f"{last['jump_first']:.4g} / {last['jump_last']:.4g}"
@@ -134,6 +141,8 @@ def main():
     p.add_argument("--systems", default="chain,lj")
     p.add_argument("--thermostats", default="langevin,csvr,berendsen")
     p.add_argument("--rules", default=",".join(INTEGRATORS))
+    p.add_argument("--reanalyse", action="store_true",
+                   help="do not run: analyse the series files of the label's work directory")
     p.add_argument("--report", action="store_true")
     p.add_argument("--labels", default="before,after")
     p.add_argument("--out")
