@@ -589,7 +589,8 @@ void FixPEJump::final_integrate()
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   if (scheme->fresh) {
     // (a Lobatto rule's sampled force at the end node is its next start node)
-    double **fp = rule->has_end_nodes() ? scheme->fstart() : (split_primary() ? fsample() : atom->f);
+    double **fp = rule->has_end_nodes() ? scheme->fstart()
+                                        : (split_primary() ? fsample() : atom->f);
     start_new_atoms(fp, rest);
   }
   double mag[2] = {0.0, 0.0};
@@ -994,8 +995,9 @@ void FixPEJump::note_damping(bool from_now) const
   if (comm->me != 0) return;
   const std::string when = from_now ? fmt::format("from step {}", update->ntimestep)
                                     : std::string("in this run");
-  utils::logmesg(lmp, "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat acts)\n",
-                 style, PEJump::ParasiticDamping::AUTO_STEPS, when);
+  utils::logmesg(
+      lmp, "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat acts)\n",
+      style, PEJump::ParasiticDamping::AUTO_STEPS, when);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -83,8 +83,7 @@ namespace PEJump {
     // if there are none: 2 [v]^n and -P^n stand in). On return p holds P^n
     // and jmp the value from which TwoStep::jump_component(d, ...) gives
     // the jump of the damped step
-    static void component(double beta, double d, double dlast, double plast, double &jmp,
-                          double &p)
+    static void component(double beta, double d, double dlast, double plast, double &jmp, double &p)
     {
       if (!std::isfinite(dlast)) dlast = 2.0 * jmp;
       p = jmp - 0.25 * (dlast + d);

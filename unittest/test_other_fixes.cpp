@@ -759,7 +759,8 @@ TEST(PEJumpOtherFixes, DepositedAtomsStartAsWithNve)
     const bool one_node = (rule == "midpoint") || (rule == "lobatto 2");
     EXPECT_NEAR(pj[0], nve[0], 1e-12) << rule << ": z after the insertion step";
     EXPECT_NEAR(pj[1], nve[1], one_node ? 1e-12 : 5e-3) << rule << ": vz after it";
-    EXPECT_NEAR(pj[2], nve[2], (rule == "lobatto 2") ? 1e-10 : 2e-4) << rule << ": z 30 steps later";
+    EXPECT_NEAR(pj[2], nve[2], (rule == "lobatto 2") ? 1e-10 : 2e-4)
+        << rule << ": z 30 steps later";
   }
 }
 
