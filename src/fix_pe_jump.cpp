@@ -1004,6 +1004,7 @@ void FixPEJump::note_damping(bool from_now) const
 
 std::string FixPEJump::instability_advice() const
 {
+  tell_largest_jump();
   // a velocity reversed by another fix (a reflecting wall, fix oneway) is
   // taken as an impulse beside the jump; the rules with interior nodes can
   // grow on many of them, lobatto 2 takes them as velocity Verlet does
@@ -1019,6 +1020,45 @@ std::string FixPEJump::instability_advice() const
                                       "grow with this rule: use quadrature lobatto 2, which "
                                       "takes them as fix nve does",
                                       reversing));
+}
+
+/* ----------------------------------------------------------------------
+   the run stops as unstable: the log names the atom with the largest jump
+   (one atom's jump or the fastest motion of the whole system)
+------------------------------------------------------------------------- */
+
+void FixPEJump::tell_largest_jump() const
+{
+  double **jump = scheme->jump();
+  struct {
+    double value;
+    int rank;
+  } mine{-1.0, comm->me}, most{};
+  int imax = -1;
+  for_atoms([&](int i) {
+    const double j2 = jump[i][0] * jump[i][0] + jump[i][1] * jump[i][1] + jump[i][2] * jump[i][2];
+    if (j2 > mine.value) {
+      mine.value = j2;
+      imax = i;
+    }
+  });
+  MPI_Allreduce(&mine, &most, 1, MPI_DOUBLE_INT, MPI_MAXLOC, world);
+  if (most.value < 0.0) return;
+  double info[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  if (comm->me == most.rank) {
+    const double *v = atom->v[imax];
+    info[0] = static_cast<double>(atom->tag[imax]);
+    for (int k = 0; k < 3; k++) info[1 + k] = atom->x[imax][k];
+    info[4] = sqrt(most.value);
+    info[5] = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  }
+  MPI_Bcast(info, 6, MPI_DOUBLE, most.rank, world);
+  if (comm->me == 0)
+    utils::logmesg(lmp,
+                   "Fix {}: the largest jump at step {}: atom {} at ({:.8g} {:.8g} {:.8g}), "
+                   "|[v]| = {:.6g}, free-flight speed {:.6g}\n",
+                   style, update->ntimestep, static_cast<tagint>(info[0]), info[1], info[2],
+                   info[3], info[4], info[5]);
 }
 
 /* ----------------------------------------------------------------------

@@ -139,6 +139,7 @@ class FixPEJump : public Fix {
   void check_excursion(double lo, double hi);
   void finish_check(const double *local);
   std::string instability_advice() const;
+  void tell_largest_jump() const;    // in the log, when the run stops as unstable
   void tally_at_node();
   void refuse_step_counters() const;
   void check_others_for_rule() const;

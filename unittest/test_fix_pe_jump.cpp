@@ -433,18 +433,22 @@ TEST(PEJump, StableJustBelowCflLimit)
 
 TEST(PEJump, InstabilityDetectedJustAboveCflLimit)
 {
-  Sim s;
+  Sim s(MPI_COMM_WORLD, false);
   harmonic_ring(s, 10, 50.0, 0.5, 3);
   s.cmd("fix 1 all pe_jump");
   s.cmd("timestep 0.102");
   s.cmd("thermo 1000");
   std::string msg = "no error";
+  ::testing::internal::CaptureStdout();
   try {
     s.cmd("run 20000 post no");
   } catch (LAMMPS_NS::LAMMPSException &e) {
     msg = e.what();
   }
+  const std::string out = ::testing::internal::GetCapturedStdout();
   EXPECT_THAT(msg, ContainsRegex("Fix pe_jump is unstable at step [0-9]+"));
+  // the log names the atom with the largest jump (one of the ring's 10)
+  EXPECT_THAT(out, ContainsRegex("the largest jump at step [0-9]+: atom ([1-9]|10) at \\("));
   EXPECT_THAT(msg, ContainsRegex("beyond the stability limit"));
   // no other fix changed velocities: no advice about them
   EXPECT_THAT(msg, Not(ContainsRegex("reversed")));
