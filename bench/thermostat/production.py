@@ -51,7 +51,7 @@ def block_error(x, nblocks=10):
 def run_one(args, system, thermostat, rule, work):
     spec = SYSTEMS[system]
     tag = f"{system}.{thermostat}.{rule.replace(' ', '')}"
-    cmd = [args.lmp, "-in", os.path.join(HERE, spec["input"]), "-var", "fix", fix_of(rule),
+    cmd = [os.path.abspath(args.lmp), "-in", os.path.join(HERE, spec["input"]), "-var", "fix", fix_of(rule),
            "-var", "thermostat", spec["thermostats"][thermostat], "-var", "nsteps",
            str(args.steps), "-var", "tag", tag, "-var", "jumpsrc",
            "0.0" if rule == "nve" else "f_1[2]", "-log", f"log.{tag}", "-screen", "none",
