@@ -111,13 +111,13 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   force_reneighbor = 1;
   next_reneighbor = -1;
 
-  reinit_pending = opened_ahead = before_open = 0;
+  reinit_pending = opened_ahead = before_open = born = 0;
   h_step = 0.0;
   end_time = 0.0;
   evals = {};
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
-  scheme->fresh = 0;
+  scheme->fresh = born = 0;
   advance_pending = 0.0;
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -587,11 +587,12 @@ void FixPEJump::final_integrate()
   double **favg = direct ? atom->f : fsum();
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
-  if (scheme->fresh) {
+  if (born) {
     // (a Lobatto rule's sampled force at the end node is its next start node)
     double **fp = rule->has_end_nodes() ? scheme->fstart()
                                         : (split_primary() ? fsample() : atom->f);
     start_new_atoms(fp, rest);
+    born = 0;
   }
   double mag[2] = {0.0, 0.0};
   opened_ahead = may_open_ahead();
@@ -1141,6 +1142,7 @@ void FixPEJump::set_arrays(int i)
   scheme->mark(i);
   for (int k = 0; k < 3; k++) scheme->jump()[i][k] = std::numeric_limits<double>::quiet_NaN();
   scheme->fresh = 1;
+  born = 1;
 }
 
 /* ----------------------------------------------------------------------
@@ -1179,7 +1181,10 @@ int FixPEJump::pack_exchange(int i, double *buf)
 
 int FixPEJump::unpack_exchange(int nlocal, double *buf)
 {
-  return state->unpack(nlocal, buf);
+  const int n = state->unpack(nlocal, buf);
+  // (an atom created in this step may move to another rank before its start)
+  if (std::isnan(scheme->jump()[nlocal][0])) born = 1;
+  return n;
 }
 
 /* ----------------------------------------------------------------------

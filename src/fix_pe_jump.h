@@ -100,6 +100,7 @@ class FixPEJump : public Fix {
   int reinit_pending;           // redo the initial kick when all fix forces are in
   int opened_ahead;             // the last step began this one already
   int before_open;              // atom->v holds v^n while this step's nodes are checked
+  int born;                     // atoms created in this step await their start (this rank)
   double advance_pending;       // free flight left for after this step's list build
   double h_step;                // step size used in the current step
   double end_time;              // update->atime of the step; the node's during it
