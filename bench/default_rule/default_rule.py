@@ -113,6 +113,17 @@ def all_rows(res):
     return head, np.array(rows)
 
 
+def integrator_vars(quad, pe_jump="pe_jump"):
+    """-var settings of an input that takes fix nve or fix pe_jump with a rule"""
+    return {"integrator": "nve"} if quad is None else {"integrator": pe_jump, "quad": quad}
+
+
+def with_integrator(text, quad):
+    """a LAMMPS input with its fix nve lines turned into fix pe_jump with the rule quad"""
+    spec = "nve" if quad is None else f"pe_jump quadrature {quad}"
+    return re.sub(r"^(fix\s+\S+\s+\S+\s+)nve\s*$", lambda m: m.group(1) + spec, text, flags=re.M)
+
+
 def energy_stats(res, ecol, htcol, norm):
     head, R = all_rows(res)
     E = R[:, head.index(ecol)]
@@ -181,7 +192,7 @@ def scene_lj(a):
     for name, quad in CONFIGS:
         v = {"start": "liquid_data", "dt": h, "Tpos": Tpos, "Trest": Trest, "nout": nout,
              "out": f"pos_{tag(name)}"}
-        v.update({"integrator": "nve"} if quad is None else {"integrator": "pe_jump", "quad": quad})
+        v.update(integrator_vars(quad))
         r = run(inp, v, wd, f"log.{tag(name)}")
         d = B.read_dump(os.path.join(wd, v["out"]))
         n = bench_line(r, "natoms")
@@ -211,7 +222,7 @@ def scene_crack(a):
     rows = []
     for name, quad in CONFIGS:
         v = {"h": h, "T": T, "tout": 0.06, "name": tag(name)}
-        v.update({"integrator": "nve"} if quad is None else {"integrator": "sync", "quad": quad})
+        v.update(integrator_vars(quad, "sync"))
         r = run(inp, v, wd, f"log.{tag(name)}")
         d = B.read_dump(os.path.join(wd, f"final.crack.{tag(name)}.dump"))
         head, R = all_rows(r)
@@ -245,7 +256,7 @@ def scene_fpu(a, soft="quartic"):
     rows = []
     for name, quad in CONFIGS:
         v = {"dt": h, "Tpos": Tpos, "T": T, "nout": 10, "soft": soft}
-        v.update({"integrator": "nve"} if quad is None else {"integrator": "pe_jump", "quad": quad})
+        v.update(integrator_vars(quad))
         r = run(inp, v, wd, f"log.{tag(name)}")
         with open(os.path.join(wd, f"log.{tag(name)}")) as f:
             pos = [ln.split() for ln in f if ln.startswith("POS ")]
@@ -303,7 +314,7 @@ def scene_string(a):
     rows = []
     for name, quad in CONFIGS:
         v = {"dt": h, "T": T, "nsample": 31, "out": f"final.{tag(name)}.dump"}
-        v.update({"integrator": "nve"} if quad is None else {"integrator": "pe_jump", "quad": quad})
+        v.update(integrator_vars(quad))
         r = run(inp, v, wd, f"log.{tag(name)}")
         d = B.read_dump(os.path.join(wd, v["out"]))
         head, R = all_rows(r)
@@ -335,7 +346,7 @@ def scene_lattice(a):
     rows = []
     for name, quad in CONFIGS:
         v = {"hS": hS, "K": K, "tout": 0.2, "check": "yes"}
-        v.update({"integrator": "nve"} if quad is None else {"integrator": "sync", "quad": quad})
+        v.update(integrator_vars(quad, "sync"))
         r = run(inp, v, wd, f"log.{tag(name)}")
         os.replace(os.path.join(wd, "check.final.dump"), os.path.join(wd, f"final.{tag(name)}.dump"))
         d = read_dump_box(os.path.join(wd, f"final.{tag(name)}.dump"))
@@ -400,7 +411,7 @@ def scene_chain(a):
     rows = []
     for name, quad in CONFIGS:
         v = {"data": data, "nsteps": 500, "nout": 100}
-        v.update({"integrator": "nve"} if quad is None else {"integrator": "pe_jump", "quad": quad})
+        v.update(integrator_vars(quad))
         r = run(inp, v, wd, f"log.{tag(name)}", check=False)
         row = {"rule": name, "runs": r["returncode"] == 0 and not r.get("error_lines"),
                "error": (r.get("error_lines") or [None])[0]}
@@ -434,7 +445,7 @@ def scene_compat(a):
         rows = []
         for name, quad in CONFIGS:
             v = {"case": case, "start": "liquid_data", "nsteps": nsteps, "nout": 10}
-            v.update({"integrator": "nve"} if quad is None else {"integrator": "pe_jump", "quad": quad})
+            v.update(integrator_vars(quad))
             r = run(inp, v, wd, f"log.{case}.{tag(name)}", check=False)
             st, err = outcome(r, os.path.join(wd, f"log.{case}.{tag(name)}"))
             row = {"rule": name, "outcome": st, "error": err}
@@ -457,8 +468,7 @@ def scene_compat(a):
             text = f.read()
         rows = []
         for name, quad in CONFIGS:
-            spec = "nve" if quad is None else f"pe_jump quadrature {quad}"
-            t = re.sub(r"^(fix\s+\S+\s+\S+\s+)nve\s*$", lambda m: m.group(1) + spec, text, flags=re.M)
+            t = with_integrator(text, quad)
             t = re.sub(r"^run\s+10000\s*$", "run             2000", t, flags=re.M)
             fn = os.path.join(wd, f"in.deposit.{tag(name)}")
             with open(fn, "w") as f:
@@ -494,8 +504,7 @@ def scene_compat(a):
         for name, quad in CONFIGS[:3]:
             if quad == "midpoint":
                 continue
-            spec = "nve" if quad is None else f"pe_jump quadrature {quad}"
-            t = re.sub(r"^(fix\s+\S+\s+\S+\s+)nve\s*$", lambda m: m.group(1) + spec, text, flags=re.M)
+            t = with_integrator(text, quad)
             t = re.sub(r"^run\s+10000\s*$", f"run 700\ndump dd all custom 1 kick.{tag(name)}.dump id vz fz\n"
                        "dump_modify dd sort id format float %.15g\nrun 1", t, flags=re.M)
             fn = os.path.join(wd, f"in.deposit-kick.{tag(name)}")
