@@ -33,7 +33,6 @@ namespace PEJump {
   class AtomState;
   class ClockAssignment;
   class ClockClasses;
-  class FirstGroup;
   class ForceSampler;
   class InteractionSplit;
   class OtherFixes;
@@ -57,7 +56,6 @@ class FixPEJumpAsync : public Fix {
   void setup_pre_reverse(int, int) override;
   void initial_integrate(int) override;
   void post_neighbor() override;
-  void setup_pre_force(int) override;
   void pre_force(int) override;
   void pre_reverse(int, int) override;
   void final_integrate() override;
@@ -88,8 +86,9 @@ class FixPEJumpAsync : public Fix {
 
   // the parts: the keywords, the quadrature rule, force evaluation, node
   // sampling, per-atom state, the scheme's updates, the stability guard,
-  // what other fixes do, the split of the interactions, the clocks, which
-  // atom is on which clock, and the work arrays
+  // what other fixes do, the split of the interactions, where the clocks
+  // are inside the coarse step, which atom is on which clock, and the
+  // work arrays
   PEJump::Options opts;
   PEJump::Quadrature *rule;
   PEJump::ForceSampler *sampler;
@@ -102,25 +101,24 @@ class FixPEJumpAsync : public Fix {
   PEJump::AsyncClocks *clocks;
   PEJump::ClockAssignment *assign;
   PEJump::ClockClasses *classes;
-  PEJump::WorkForces *work;     // SUM: fine quadrature sum, SAMPLE: primary force, COARSE
-  PEJump::FirstGroup *first;    // the opt-in atom_modify first + neigh_modify include
+  PEJump::WorkForces *work;    // SUM: fine quadrature sum, COARSE: coarse quadrature sum
 
-  // per-atom state fields: the quadrature sum of the forces on slow atoms
-  // over the fine steps done in this coarse step (force x time) and
-  // (Lobatto rules) the slow-interaction force at the coarse start node
+  // per-atom state fields: the sum of the fine forces on a slow atom over
+  // the fine steps done in this coarse step (force x time) and (Lobatto
+  // rules) the slow-interaction force at the coarse start node
   int FACC, FSTART_COARSE;
 
   int reinit_pending;           // redo the initial kick when all fix forces are in
-  int opened_ahead;             // the last fine step began this one (nothing looked in between)
-  double build_ahead;           // the moving atoms went on by this for a forced list build
   PEJump::Evaluations evals;    // force evaluations
   int changes_seen;             // another fix changed a velocity (this rank)
+  double fine_speed2;           // largest |v|^2 of the moving atoms in this coarse step
+  double fine_change;           // largest velocity change of an atom over a fine step
 
-  enum { SUM, SAMPLE, COARSE };
+  enum { SUM, COARSE };
   void grow_work();
   PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
   bool watch(int when) const;    // other fixes may change velocities then (OtherFixes hooks)
-  PEJump::FreeFlight free_flight() const;    // fine-clock atoms inside their fine step
+  PEJump::FreeFlight free_flight() const;    // inside the coarse step: all atoms in their steps
 
   void refuse_keywords() const;
   void refuse_unsplittable() const;
@@ -128,46 +126,37 @@ class FixPEJumpAsync : public Fix {
   void refuse_other_fixes() const;
   void check_clocks();
   void start_scheme(const char *, bool);
-  void change_clocks();      // a dynamic fast group or fast auto, at coarse nodes
-  void ahead_for_build();    // to the step end for lists built whatever the atoms do
-  void back_from_build();
-  void move_moving(double dt);    // free flight of the atoms that move on fine steps
+  void change_clocks();    // a dynamic fast group or fast auto, at coarse nodes
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);
   void choose_fast(std::vector<int> &chosen) const;
   void restart_jumps(const std::vector<int> &to_fine, double **f);
   void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
-  // inside a coarse step: the slow atoms get their fine impulses (event:
-  // what breaks the coarse step off, for a warning)
-  void hand_over_impulses(const std::string &event);
   void continue_scheme();
-  void refuse_slow_velocity_changes();    // inside a coarse step (at setup)
-  void warn_output_between_nodes() const;
-  void refuse_data_file() const;    // write_data inside a coarse step (at init)
-  bigint slow_total() const;        // atoms on the coarse clock (global)
   void node_impulses();
-  void note_velocity_changes(const AtomList *);
   void refuse_velocity_changes();    // an error if another fix changed a velocity
-  void open_steps();
-  void check_lists();
+
+  // one coarse step: the fine steps up to the primary coarse node, where
+  // the MD step evaluates the coarse interactions, then the rest
+  void begin_coarse_step();
+  void fine_steps_until(double nodes_in_fine_steps);
+  void fine_step();
+  void check_fine_nodes(double into);
+  void move_moving(double dt);
+  void hold_until(double t);    // the slow atoms outside fine interactions move to t
+  void fine_quadrature_sum();
+  void finish_fine_step(double **favg, double *mag);
+  void keep_coarse_primary();
+  void coarse_quadrature_sum();
+  void slow_jumps(double *mag);
+  void predict_lists();
   void finish_check(const double *local);
   std::string instability_advice() const;
-  bool may_open_ahead() const;
-  void advance(double);
-  void all_to_primary_node(double);
   void slow_magnitudes();
-  void catch_up_all();    // the atoms that sit out fine steps catch up
   double node_cost() const;
-  bool step_forces_read() const;
-  void fine_quadrature_sum();
-  void coarse_quadrature_sum(PEJump::NodeSampler::Keep &, const PEJump::AtomSet &slow);
-  void coarse_node(double **favg, double mag[2][2]);
-  void reach_coarse_node(double **favg, double mag[2][2], double **xslow);
-  void continue_fine_step(double **favg, double *mag);
   void show_classes();    // vector_atom follows the state table
-  // values of the global restart state: 12, then the census of the last
-  // run's end (TwoStep::NCENSUS), told by the first value (2 or 3; files
-  // of earlier versions: 0 or 1, without it), then the buffer's reach (first
-  // value 6 or 7; earlier files: without it)
+  void log_steps() const;
+  // values of the global restart state: 16 + head bits, then the census of
+  // the last run's end (TwoStep::NCENSUS), the buffer's reach
   static constexpr int NGLOBAL = 24;
 };
 

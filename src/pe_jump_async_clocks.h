@@ -14,52 +14,50 @@
 #ifndef LMP_PE_JUMP_ASYNC_CLOCKS_H
 #define LMP_PE_JUMP_ASYNC_CLOCKS_H
 
-#include "pe_jump_node_sampler.h"
-
 namespace LAMMPS_NS {
 namespace PEJump {
-  class AtomState;
 
-  // The clocks of pe_jump/async: K fine steps make a coarse step, and all
-  // times are times within the current coarse step. The atoms that move
-  // with the fine steps are at now(); a slow atom that takes part in no
-  // fine interaction sits out the fine steps at the time its position
-  // belongs to (per atom, a field of the state table) and catches up with
-  // its free flight when it is needed.
+  // Where the clocks of pe_jump/async are inside one coarse step, which is
+  // one MD step: the coarse step H (the MD time step) holds K fine steps of
+  // h = H / K. The atoms that move on fine steps have done done() of them
+  // and are into() the next; the slow atoms outside fine interactions are
+  // held at held() (times from the coarse step's start). Times inside the
+  // coarse step are counted in fine steps where they are compared, so that
+  // a node at K/2 fine steps is one whatever the rounding of H / K.
 
-  class AsyncClocks : protected Pointers {
+  class AsyncClocks {
    public:
-    static constexpr double MOVING = -1.0;    // per-atom time of an atom that moves
-
-    AsyncClocks(class LAMMPS *, AtomState &, int nfine);
+    explicit AsyncClocks(int nfine) : nfine(nfine) {}
 
     int steps() const { return nfine; }
-    int done() const { return fine; }    // fine steps done in this coarse step
-    bool at_coarse_node() const { return fine == 0; }
-    bool last_fine_step() const { return fine + 1 >= nfine; }
-    bool next_is_last() const { return fine + 2 >= nfine; }    // inside a fine step
-    double start() const { return elapsed; }    // time at the start of this fine step
-    double now() const { return tnow; }         // time of the atoms that move
+    void begin(double coarse_step)    // the coarse step begins: nothing done
+    {
+      coarse = coarse_step;
+      fine = 0;
+      into_fine = 0.0;
+      held_at = 0.0;
+    }
+    double coarse_step() const { return coarse; }
+    double fine_step() const { return coarse / nfine; }
+    int done() const { return fine; }
+    double into() const { return into_fine; }    // time into the current fine step
+    double held() const { return held_at; }
 
-    void begin_coarse();                 // a new coarse step, at its start (atoms caught up)
-    void moving_at(double t);            // the moving atoms went on to start() + t
-    void end_fine(double h);             // a fine step of size h ended
-    bool restore(const double *list);    // restart data (K, fine steps, time): K the same?
-    void save(double *list) const;
-
-    // per atom: its time (MOVING if it moves with the fine steps), hold it
-    // at now(), catch it up to now() with free-flight velocity v (it then
-    // moves if moving)
-    double *times() const;
-    void hold(int i);
-    void catch_up(int i, const FreeFlight &v, bool moving);
-    void catch_up_all(const FreeFlight &v, const int *moving);
+    // the moving atoms are at u fine steps from the coarse step's start,
+    // inside the fine step they are in
+    void moved_to(double u) { into_fine = (u - fine) * fine_step(); }
+    void fine_step_done()
+    {
+      ++fine;
+      into_fine = 0.0;
+    }
+    void hold_at(double t) { held_at = t; }
 
    private:
-    AtomState &state;
-    int TIME;    // state field
-    int nfine, fine;
-    double elapsed, tnow;
+    int nfine;
+    double coarse = 0.0;
+    int fine = 0;
+    double into_fine = 0.0, held_at = 0.0;
   };
 
 }    // namespace PEJump

@@ -23,7 +23,6 @@
 #include "modify.h"
 #include "neighbor.h"
 #include "output.h"
-#include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_interaction_split.h"
 #include "update.h"
@@ -435,13 +434,11 @@ void ClockAssignment::find_slow(const InteractionSplit &split)
 
 /* ----------------------------------------------------------------------
    atoms that move on fine steps: those on the fine clock and the slow ones
-   that take part in a fine interaction, here or as a ghost elsewhere. A
-   slow atom that joins a fine interaction inside a coarse step catches up
-   with its free flight first.
+   that take part in a fine interaction, here or as a ghost elsewhere (the
+   lists are built where every atom is at the same time)
 ------------------------------------------------------------------------- */
 
-bool ClockAssignment::find_moving(const InteractionSplit &split, AsyncClocks &clocks,
-                                  const FreeFlight &vhalf)
+void ClockAssignment::find_moving(const InteractionSplit &split)
 {
   split.mark_fine_participants(participant);
   gather(participant);
@@ -452,24 +449,17 @@ bool ClockAssignment::find_moving(const InteractionSplit &split, AsyncClocks &cl
   moving_atoms.clear();
   fast_atoms.clear();
   slow_moving.clear();
-  int caught = 0;
+  slow_held.clear();
   for (int i = 0; i < nlocal; i++) {
     moving_flag[i] = !slow_flag[i] || participant[i];
     if (!(mask[i] & fix->groupbit)) continue;
     if (moving_flag[i]) {
       moving_atoms.push_back(i);
       (slow_flag[i] ? slow_moving : fast_atoms).push_back(i);
-      if (clocks.times()[i] != AsyncClocks::MOVING) {
-        clocks.catch_up(i, vhalf, true);
-        caught = 1;
-      }
     } else {
-      clocks.hold(i);    // stays here until it is needed
+      slow_held.push_back(i);
     }
   }
-  int any = 0;
-  MPI_Allreduce(&caught, &any, 1, MPI_INT, MPI_MAX, world);
-  return any != 0;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -22,7 +22,6 @@
 namespace LAMMPS_NS {
 class Fix;
 namespace PEJump {
-  class AsyncClocks;
   class AtomState;
   class InteractionSplit;
 
@@ -92,16 +91,16 @@ namespace PEJump {
     bool changed();
 
     // after a list build: the slow atoms, then those that move on fine
-    // steps; slow atoms that join a fine interaction catch up (true if
-    // any rank caught up an atom: the ghosts are stale)
+    // steps
     void find_slow(const InteractionSplit &);
-    bool find_moving(const InteractionSplit &, AsyncClocks &, const FreeFlight &);
+    void find_moving(const InteractionSplit &);
     const int *slow() const { return slow_flag.data(); }
     const int *moving() const { return moving_flag.data(); }
     const int *participants() const { return participant.data(); }    // owned and ghost
     AtomList moving_atoms;    // the atoms of the group that move on fine steps:
     AtomList fast_atoms;      // those on the fine clock
     AtomList slow_moving;     // and the slow ones in a fine interaction
+    AtomList slow_held;       // the slow atoms in none (held during fine steps)
     AtomList slow_atoms;      // the atoms of the group on the coarse clock
 
     // restart: buffer layers and fine-clock atoms (number, ID hash) of
