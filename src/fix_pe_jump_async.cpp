@@ -55,6 +55,7 @@
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_two_step.h"
 #include "pe_jump_work_forces.h"
+#include "timer.h"
 #include "update.h"
 
 #include <cmath>
@@ -74,10 +75,6 @@ using PEJump::StabilityGuard;
 
 // nodes closer than this (in fine steps) are the same
 static constexpr double SAME_NODE = 1.0e-9;
-// a list build is asked for where an atom could come within this share of
-// its speed's reach of half the skin before the next MD step's check: the
-// speeds of the coarse step may grow by this much in the next
-static constexpr double SPEED_MARGIN = 0.5;
 // restart head bit: written with timestep = the coarse step
 static constexpr int COARSE_TIMESTEP = 16;
 
@@ -86,8 +83,8 @@ static constexpr int COARSE_TIMESTEP = 16;
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
-    assign(nullptr), classes(nullptr), work(nullptr), reinit_pending(0), changes_seen(0),
-    fine_speed2(0.0), fine_change(0.0)
+    assign(nullptr), classes(nullptr), work(nullptr), changes_seen(0), fine_speed2(0.0),
+    fine_change(0.0), reverse_copy(false), builds_inside(0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -112,6 +109,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
   FACC = state->add("facc", 3, 0.0);
   FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
+  END_IMPULSE = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
+  FCOARSE = state->add("fcoarse", 3, 0.0);
   assign = new ClockAssignment(lmp, this, arg[4], {opts.buffer_layers, opts.buffer_reach},
                                opts.fast_auto > 0.0);
   classes = new PEJump::ClockClasses(lmp, *state);
@@ -133,7 +132,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   restart_peratom = 1;
   create_attribute = 1;
   comm_forward = 1;
-  comm_reverse = 1;
+  comm_reverse = 3;
   force_reneighbor = 1;
   next_reneighbor = -1;
 
@@ -187,6 +186,11 @@ void FixPEJumpAsync::init()
                "Fix {} does not support neigh_modify include: the neighbor lists must hold the "
                "pairs of every atom",
                style);
+  const bool primary_at_end = (rule->node[rule->primary()] == 1.0);
+  others->refuse_for_rule(rule->name(), primary_at_end, rule->only_end_nodes());
+  others->warn_step_number(rule->name(), primary_at_end, rule->only_end_nodes());
+  others->warn_energy_inside_step(rule->name(), primary_at_end);
+  others->warn_langevin_inside_step(rule->name(), primary_at_end);
   split->start_run();
   assign->find_groups();
   split->set_fine_bit(assign->clock_bit());
@@ -212,15 +216,24 @@ void FixPEJumpAsync::post_neighbor()
 }
 
 /* ----------------------------------------------------------------------
-   at a coarse node: a velocity that another fix changed since the last
-   step is refused (pe_jump/async does not take velocity changes yet)
+   at the coarse node, as the coarse step begins: a velocity that another
+   fix changed since the last step (a thermostat, fix momentum) changed
+   the node velocity, and the free flight changes by as much (the jumps
+   are kept); the second half of the Lobatto rules' impulse of the other
+   fixes' forces at the node (velocity Verlet), given the same way
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::node_impulses()
 {
-  if (!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) return;
-  if (scheme->any_changed(group_atoms())) changes_seen = 1;
-  refuse_velocity_changes();
+  if (END_IMPULSE < 0) return;
+  double **v = atom->v;
+  double **pending = state->vec(END_IMPULSE);
+  group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
+    for (int k = 0; k < 3; k++) {
+      v[i][k] += pending[i][k];
+      pending[i][k] = 0.0;
+    }
+  });
 }
 
 /* ----------------------------------------------------------------------
@@ -367,7 +380,10 @@ void FixPEJumpAsync::refuse_unsplittable() const
 }
 
 /* ----------------------------------------------------------------------
-   other fixes that integrate atoms or act on the forces
+   other fixes that integrate atoms, or act where the atoms are on two
+   clocks: the fixes that act on the forces or velocities at coarse nodes
+   (at the MD step's evaluation, at its end) are taken, see the sequence of
+   a coarse step
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::refuse_other_fixes() const
@@ -384,7 +400,7 @@ void FixPEJumpAsync::refuse_other_fixes() const
   // a force field that changes during the run (fix adapt) would be sampled
   // at the fine and the coarse nodes at other times than theirs; fixes that
   // act in initial_integrate (fix recenter, fix tmd) take the atoms for
-  // being at the step end, where neither clock leaves them
+  // being at the step start, which the fine steps leave
   for (const auto &ifix : modify->get_fix_list()) {
     const bool adapts = utils::strmatch(ifix->style, "^adapt");
     if ((ifix != this) && !ifix->time_integrate &&
@@ -395,56 +411,33 @@ void FixPEJumpAsync::refuse_other_fixes() const
                  ifix->id, ifix->style,
                  adapts ? "changes the force field during the run: the fine and the coarse forces "
                           "are sampled at different times"
-                        : "acts on the atoms in initial_integrate, where they are inside their "
-                          "steps on two clocks");
+                        : "acts on the atoms in initial_integrate, where the fine steps begin");
   }
   // fix deform with remap v changes the velocity of an atom that crosses a
-  // periodic boundary, which a slow atom cannot take inside its step
+  // periodic boundary inside its step
   if (domain->deform_vremap)
     error->all(FLERR,
                "Fix pe_jump/async cannot yet be combined with fix deform with remap v, which "
                "changes the velocities of atoms that cross a periodic boundary. Use remap x, or "
                "fix pe_jump");
 
-  // the fine and coarse forces of a slow atom are sampled apart, so another
-  // fix cannot act on its total force; only fix enforce2d (which zeroes a
-  // component that is zero anyway) may act on the forces. The advice fits
-  // what the fix is for: atoms held by setforce and its kin can be left
-  // out of the fix group, an indenter or an added force cannot
+  // velocities reversed inside the step (at the primary coarse node, where
+  // the atoms on the fine clock are inside a fine step), and atoms inserted
+  // there, which have no state for the rest of the coarse step
   for (const auto &ifix : modify->get_fix_list()) {
-    if ((ifix == this) || !(ifix->setmask() & POST_FORCE) ||
-        utils::strmatch(ifix->style, "^enforce2d"))
-      continue;
-    if (OtherFixes::replaces_forces(ifix))
+    if (ifix == this) continue;
+    if (OtherFixes::style_is(ifix, {"^wall/reflect", "^oneway"}))
       error->all(FLERR,
-                 "Fix pe_jump/async cannot yet be combined with fix {} ({}), which acts on the "
-                 "forces: a slow atom's fine and coarse forces are sampled apart. Hold atoms by "
-                 "leaving them out of the fix group (frozen scenery), or use fix pe_jump",
+                 "Fix pe_jump/async cannot yet be combined with fix {} ({}), which reverses "
+                 "velocities inside the coarse step. Use fix pe_jump, or a wall that exerts a "
+                 "force (fix wall/lj93, ...)",
                  ifix->id, ifix->style);
-    if (utils::strmatch(ifix->style, "^indent"))
+    if (OtherFixes::inserted_bits(ifix))
       error->all(FLERR,
-                 "Fix pe_jump/async cannot yet be combined with fix {} ({}): the indenter pushes "
-                 "atoms with a force that depends on their positions, which the split into fine "
-                 "and coarse forces (sampled at different nodes for a slow atom) cannot place. "
-                 "Use fix pe_jump, which takes the indenter's force as an impulse in every step",
+                 "Fix pe_jump/async cannot yet be combined with fix {} ({}), which inserts atoms "
+                 "inside the coarse step. Use fix pe_jump",
                  ifix->id, ifix->style);
-    error->all(FLERR,
-               "Fix pe_jump/async cannot yet be combined with fix {} ({}), which adds forces: "
-               "the split into fine and coarse forces (sampled at different nodes for a slow "
-               "atom) cannot place them. Use fix pe_jump, which takes such forces as impulses",
-               ifix->id, ifix->style);
   }
-
-  // the velocity changes of fixes made for them would be refused at their
-  // first action (refuse_velocity_changes()), which may come late in the
-  // run (fix momentum 100: step 101)
-  for (const auto &ifix : modify->get_fix_list())
-    if ((ifix != this) && OtherFixes::changes_velocities(ifix))
-      error->all(FLERR,
-                 "Fix pe_jump/async cannot yet be combined with fix {} ({}), which changes "
-                 "velocities during the run: pe_jump/async does not take velocity changes yet. "
-                 "Use fix pe_jump",
-                 ifix->id, ifix->style);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -464,9 +457,9 @@ void FixPEJumpAsync::refuse_velocity_changes()
   MPI_Allreduce(&changes_seen, &any, 1, MPI_INT, MPI_MAX, world);
   if (any)
     error->all(FLERR,
-               "Fix pe_jump/async: another fix (fix wall/reflect, fix oneway, ...) changed "
-               "velocities during the run before step {}; pe_jump/async does not take velocity "
-               "changes yet. Use fix pe_jump",
+               "Fix pe_jump/async: another fix changed velocities inside the coarse step of step "
+               "{} (before the force evaluation at its primary node); pe_jump/async takes velocity "
+               "changes at coarse nodes only (between steps). Use fix pe_jump",
                update->ntimestep);
 }
 
@@ -598,6 +591,11 @@ void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 {
   split->restore();
   nodes->note_step_flags(eflag, vflag);
+  // the coarse interactions' forces, before other fixes add theirs
+  if (!others->add_forces()) return;
+  work->ensure(atom->nlocal + atom->nghost, needed_work() | (1 << COPY));
+  const int nall = atom->nlocal + atom->nghost;
+  if (nall) memcpy(&work->get(COPY)[0][0], &atom->f[0][0], 3 * sizeof(double) * nall);
 }
 
 /* ----------------------------------------------------------------------
@@ -622,14 +620,26 @@ void FixPEJumpAsync::unpack_forward_comm(int n, int first, double *buf)
 
 int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
 {
-  return assign->reversing() ? assign->pack_reverse(n, first, buf) : 0;
+  if (!reverse_copy) return assign->reversing() ? assign->pack_reverse(n, first, buf) : 0;
+  double **copy = work->get(COPY);
+  int m = 0;
+  for (int i = first; i < first + n; i++)
+    for (int k = 0; k < 3; k++) buf[m++] = copy[i][k];
+  return m;
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::unpack_reverse_comm(int n, int *list, double *buf)
 {
-  if (assign->reversing()) assign->unpack_reverse(n, list, buf);
+  if (!reverse_copy) {
+    if (assign->reversing()) assign->unpack_reverse(n, list, buf);
+    return;
+  }
+  double **copy = work->get(COPY);
+  int m = 0;
+  for (int i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) copy[list[i]][k] += buf[m++];
 }
 
 /* ----------------------------------------------------------------------
@@ -765,15 +775,12 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
                "Fix {}: LAMMPS was initialized since the last run (write_restart, write_data, "
                "...): start this run with setup (run N, not run N pre no)",
                style);
-  if (reinit_pending) start_scheme(nullptr, false);
-  reinit_pending = 0;
   if (scheme->started) change_clocks();
   node_impulses();
   begin_coarse_step();
   const double primary = rule->node[rule->primary()];
   fine_steps_until(primary * clocks->steps());
   hold_until(primary * update->dt);
-  predict_lists();
 }
 
 /* ----------------------------------------------------------------------
@@ -815,7 +822,7 @@ void FixPEJumpAsync::fine_step()
 {
   const double h = clocks->fine_step();
   const double into = clocks->into();
-  check_fine_nodes(into);
+  if (check_fine_nodes(into)) build_lists_now();
   move_moving(rule->node[rule->primary()] * h - into);
 
   // the evaluations clear and keep the forces of the atoms they act on only
@@ -869,7 +876,7 @@ void FixPEJumpAsync::hold_until(double t)
    the last list build, which LAMMPS checks only at the MD step
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::check_fine_nodes(double into)
+bool FixPEJumpAsync::check_fine_nodes(double into)
 {
   const double h = clocks->fine_step();
   const double lo = rule->node[rule->has_end_nodes() ? 1 : 0] * h - into;
@@ -884,65 +891,57 @@ void FixPEJumpAsync::check_fine_nodes(double into)
   local[1] = MAX(local[1], clocks->coarse_step() * clocks->coarse_step() * guard->slow_speed2());
   local[3] = MAX(local[3], guard->slow_jump2());
   local[4] = MAX(local[4], guard->slow_speed2());
-  finish_check(local);
+  return finish_check(local);
 }
 
 /* ----------------------------------------------------------------------
-   act on the stability guard's verdict (the ranks agree); inside a coarse
-   step the lists cannot be built again
+   act on the stability guard's verdict (the ranks agree): true if the
+   lists must be built again
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::finish_check(const double *local)
+bool FixPEJumpAsync::finish_check(const double *local)
 {
   double none = 0.0;
-  const bool rebuild = guard->conclude(
-      style, local, none, [&]() { return scheme->energies(group_atoms()); },
-      [&]() { return instability_advice(); });
-  if (rebuild)
-    error->all(FLERR,
-               "Fix {}: atoms on the fine clock would move more than half the neighbor skin ({}) "
-               "from where the lists were built before the next list check (step {}, {} of {} "
-               "fine steps done): increase the skin or reduce the time step",
-               style, neighbor->skin, update->ntimestep, clocks->done(), clocks->steps());
+  return guard->conclude(
+      style, local, none,
+      [&]() {
+        return scheme->energies(group_atoms());
+      },
+      [&]() {
+        return instability_advice();
+      });
 }
 
 /* ----------------------------------------------------------------------
-   at the primary coarse node, before LAMMPS checks the lists: a build now
-   if an atom could come beyond half the skin from the last build's
-   positions before the next check (the next MD step's), from its distance
-   now and the speeds of its clock (the fastest atoms' speed may grow by
-   SPEED_MARGIN of itself in a coarse step); an error if the fastest atoms
-   move beyond half the skin in one coarse step
+   inside the coarse step, where a fine step's nodes would leave half the
+   skin: every atom to the time of the moving atoms, and the lists built
+   there as the MD step builds them (Verlet::run(); LAMMPS offers no call
+   for it). Atoms may change owner and order: what a coarse step keeps per
+   atom is in the state table, which moves with them; nothing is inserted
+   (no pre_exchange()) and the atoms are not sorted
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::predict_lists()
+void FixPEJumpAsync::build_lists_now()
 {
-  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
-  if (!xhold || neighbor->build_once) return;
-  const double coarse = update->dt;
-  double **x = atom->x;
-  double **v = atom->v;
-  double local[2] = {0.0, 0.0}, global[2];    // largest distance + reach, speed^2
-  group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
-    double d2 = 0.0, v2 = 0.0;
-    for (int k = 0; k < 3; k++) {
-      d2 += (x[i][k] - xhold[i][k]) * (x[i][k] - xhold[i][k]);
-      v2 += v[i][k] * v[i][k];
-    }
-    local[0] = MAX(local[0], sqrt(d2) + coarse * sqrt(v2));
-    local[1] = MAX(local[1], v2);
-  });
-  MPI_Allreduce(local, global, 2, MPI_DOUBLE, MPI_MAX, world);
-  const double fastest = MAX(sqrt(global[1]), sqrt(fine_speed2));
-  const double half_skin = 0.5 * neighbor->skin;
-  if (coarse * fastest >= half_skin)
-    error->all(FLERR,
-               "Fix {}: atoms move {:.4g} in a coarse step of {} (speed {:.4g}), more than half "
-               "the neighbor skin {}: use a skin larger than {:.4g}, or a smaller time step",
-               style, coarse * fastest, coarse, fastest, neighbor->skin,
-               2.0 * (1.0 + SPEED_MARGIN) * coarse * fastest);
-  if (global[0] + SPEED_MARGIN * coarse * fastest > half_skin)
-    next_reneighbor = update->ntimestep;
+  hold_until(clocks->done() * clocks->fine_step() + clocks->into());
+  if (domain->triclinic) domain->x2lamda(atom->nlocal);
+  domain->pbc();
+  if (domain->box_change) {
+    domain->reset_box();
+    comm->setup();
+    if (neighbor->style) neighbor->setup_bins();
+  }
+  timer->stamp();
+  comm->exchange();
+  comm->borders();
+  if (domain->triclinic) domain->lamda2x(atom->nlocal + atom->nghost);
+  timer->stamp(Timer::COMM);
+  if (modify->n_pre_neighbor) modify->pre_neighbor();
+  neighbor->build(1);
+  timer->stamp(Timer::NEIGH);
+  if (modify->n_post_neighbor) modify->post_neighbor();
+  grow_work();
+  ++builds_inside;
 }
 
 /* ----------------------------------------------------------------------
@@ -985,8 +984,8 @@ void FixPEJumpAsync::fine_quadrature_sum()
   if (rule->size() - first <= 1) return;
   const double h = clocks->fine_step();
   const int evaluated =
-      nodes->sum_nodes(*rule, first, p, h, -rule->node[p] * h, free_flight(),
-                       group_atoms(&moving), opts.sample_mask, fsum, nullptr, false);
+      nodes->sum_nodes(*rule, first, p, h, -rule->node[p] * h, free_flight(), group_atoms(&moving),
+                       opts.sample_mask, fsum, nullptr, false);
   evals.step += evaluated * node_cost();
 }
 
@@ -1005,7 +1004,8 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double *mag)
   double **facc = state->vec(FACC);
   const double rest = (1.0 - rule->node[rule->primary()]) * h;
   const bool more = clocks->done() + 1 < clocks->steps();
-  const bool fingerprint = watch(more ? OtherFixes::INSIDE_STEP : OtherFixes::BETWEEN_STEPS);
+  const bool fingerprint =
+      watch(more ? OtherFixes::INSIDE_STEP : (OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP));
   scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
                     {h, rest, more ? 0.0 : -1.0, fingerprint}, mag);
   for (const int i : assign->slow_moving)
@@ -1029,13 +1029,14 @@ void FixPEJumpAsync::final_integrate()
     refuse_velocity_changes();
   }
   evals.step += split->fraction(InteractionSplit::COARSE);
-  keep_coarse_primary();
+  keep_coarse_primary(others->add_forces() ? coarse_forces_apart() : atom->f);
   fine_steps_until(clocks->steps());
   hold_until(update->dt);
   coarse_quadrature_sum();
   double mag[2] = {0.0, 0.0};
   slow_jumps(mag);
   guard->set_slow_stats(mag[0], mag[1]);
+  if (END_IMPULSE >= 0) end_impulse_first_half();
 
   split->activate(InteractionSplit::ALL);
   // no other time integrator (refuse_other_fixes()): no atoms to leave out
@@ -1058,10 +1059,9 @@ void FixPEJumpAsync::final_integrate()
    the primary node of a Lobatto rule is the next coarse step's start node
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::keep_coarse_primary()
+void FixPEJumpAsync::keep_coarse_primary(double **f)
 {
-  double **f = atom->f;
-  double **fcoarse = work->get(COARSE);
+  double **fcoarse = state->vec(FCOARSE);
   double **fstart = rule->has_end_nodes() ? state->vec(FSTART_COARSE) : nullptr;
   const double wp = rule->weight[rule->primary()];
   for (const int i : assign->slow_atoms)
@@ -1072,6 +1072,67 @@ void FixPEJumpAsync::keep_coarse_primary()
         fstart[i][k] = f[i][k];
       }
     }
+}
+
+/* ----------------------------------------------------------------------
+   other fixes added forces R to the coarse interactions' forces at the
+   primary coarse node (kept apart in COPY, summed over the ghosts and
+   acted on by the force-replacing fixes as the total was): every atom of
+   the group gets the impulse h_S R/m there. Inside the coarse step (the
+   midpoint and Legendre rules: position Verlet for these forces) on its
+   free-flight velocity, which carries it on; at the end node (Lobatto
+   rules: velocity Verlet) half on the node velocity there and half as the
+   next coarse step begins (END_IMPULSE). Returns the coarse interactions'
+   forces.
+------------------------------------------------------------------------- */
+
+double **FixPEJumpAsync::coarse_forces_apart()
+{
+  grow_work();
+  double **fcoarse = work->get(COPY);
+  if (force->newton) {
+    reverse_copy = true;
+    comm->reverse_comm(this);
+    reverse_copy = false;
+  }
+  const int nlocal = atom->nlocal;
+  if (sampler->has_projections()) {
+    NodeSampler::Keep keep(*nodes);
+    if (nlocal) memcpy(&atom->f[0][0], &fcoarse[0][0], 3 * sizeof(double) * nlocal);
+    sampler->project();
+    if (nlocal) memcpy(&fcoarse[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
+  }
+  double **f = atom->f;
+  double **v = atom->v;
+  double **pending = (END_IMPULSE >= 0) ? state->vec(END_IMPULSE) : nullptr;
+  const double kick = update->dt * force->ftm2v;
+  group_atoms().each(atom->mask, nlocal, [&](int i) {
+    const double scale = kick * scheme->inverse_mass_of(i);
+    for (int k = 0; k < 3; k++) {
+      const double dv = scale * (f[i][k] - fcoarse[i][k]);
+      if (pending)
+        pending[i][k] = 0.5 * dv;
+      else
+        v[i][k] += dv;
+    }
+  });
+  return fcoarse;
+}
+
+/* ----------------------------------------------------------------------
+   Lobatto rules: the first half of the impulse of the other fixes' forces
+   on the node velocities at the end of the coarse step
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::end_impulse_first_half()
+{
+  double **v = atom->v;
+  double **pending = state->vec(END_IMPULSE);
+  const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
+  group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
+    for (int k = 0; k < 3; k++) v[i][k] += pending[i][k];
+    if (fingerprint) scheme->mark(i);
+  });
 }
 
 /* ----------------------------------------------------------------------
@@ -1087,7 +1148,7 @@ void FixPEJumpAsync::coarse_quadrature_sum()
   split->activate(InteractionSplit::COARSE);
   const int evaluated = nodes->sum_nodes(*rule, first, rule->primary(), coarse, -coarse,
                                          free_flight(), group_atoms(&assign->slow_atoms),
-                                         opts.sample_mask, work->get(COARSE), nullptr, false);
+                                         opts.sample_mask, state->vec(FCOARSE), nullptr, false);
   evals.step += evaluated * node_cost();
   split->restore();
 }
@@ -1102,7 +1163,7 @@ void FixPEJumpAsync::slow_jumps(double *mag)
   double **v = atom->v;
   double **jump = scheme->jump();
   double **facc = state->vec(FACC);
-  double **fcoarse = work->get(COARSE);
+  double **fcoarse = state->vec(FCOARSE);
   const double coarse = update->dt;
   const double kick = 2.0 * coarse * force->ftm2v;
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
@@ -1161,7 +1222,7 @@ void FixPEJumpAsync::change_clocks()
       (split->fraction(InteractionSplit::FINE) < 0.5);
   if (by_subsets) {
     grow_work();
-    evals.total += fine_forces_at_node(work->get(COARSE), nullptr);
+    evals.total += fine_forces_at_node(work->get(SUM), nullptr);
   }
   // the buffer layers are the partners within the cutoff at the node: the
   // ghost atoms must be there too (without energy output at the node they
@@ -1189,8 +1250,8 @@ void FixPEJumpAsync::change_clocks()
     restart_jumps(to_fine, total);
     evals.total += 1.0;
   } else if (by_subsets) {
-    evals.total += fine_forces_at_node(work->get(COARSE), &to_fine);
-    restart_jumps(to_fine, work->get(COARSE));
+    evals.total += fine_forces_at_node(work->get(SUM), &to_fine);
+    restart_jumps(to_fine, work->get(SUM));
   } else {
     NodeSampler::Keep keep(*nodes);
     sampler->compute(ForceSampler::ALL, 0, 0);
@@ -1255,7 +1316,9 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
   double before[2], after[2];
   scheme->energies_now(atoms, before);
   const double coarse = update->dt, fine = coarse / clocks->steps();
-  scheme->start(atoms, f, 1.0, [&](int i) { return (to_fine[i] > 0) ? fine : coarse; });
+  scheme->start(atoms, f, 1.0, [&](int i) {
+    return (to_fine[i] > 0) ? fine : coarse;
+  });
   scheme->energies_now(atoms, after);
   // the pseudo-energy pe + (1/2) sum m v^{n-1/2}.v^{n+1/2} = pe + kinetic -
   // jump energy, with positions and node velocities kept
@@ -1287,12 +1350,22 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   if (with_start && rule->has_end_nodes()) store_start_node();
   const double kick = (opts.init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
   const double coarse = update->dt, fine = coarse / clocks->steps();
-  scheme->start(group_atoms(), atom->f, kick,
-                [&](int i) { return split->coarse(i) ? coarse : fine; });
-  // fixes defined after this one act on the forces after its setup(): redo
-  // the initial kick with the complete forces at the first step
-  reinit_pending =
-      with_start && (opts.init_style == PEJump::Options::KICK) && sampler->has_projections();
+  const auto kick_with = [&](double **f) {
+    scheme->start(group_atoms(), f, kick, [&](int i) {
+      return split->coarse(i) ? coarse : fine;
+    });
+  };
+  // the forces of the interactions (acted on by the force-replacing fixes)
+  // without those that other fixes add: the setup's forces hold what the
+  // fixes before this one did only
+  if (others->add_forces() || sampler->has_projections()) {
+    NodeSampler::Keep keep(*nodes);
+    sampler->compute(ForceSampler::ALL, 0, 0);
+    evals.total += 1.0;
+    kick_with(atom->f);
+  } else {
+    kick_with(atom->f);
+  }
   scheme->started = 1;
   guard->forget_stats();
 }
@@ -1416,7 +1489,14 @@ void FixPEJumpAsync::check_clocks()
 
 void FixPEJumpAsync::grow_work()
 {
-  work->ensure(atom->nlocal, (1 << COARSE) | ((rule->size() > 1) ? 1 << SUM : 0));
+  work->ensure(others->add_forces() ? atom->nlocal + atom->nghost : atom->nlocal, needed_work());
+}
+
+/* ---------------------------------------------------------------------- */
+
+int FixPEJumpAsync::needed_work() const
+{
+  return (1 << SUM) | (others->add_forces() ? 1 << COPY : 0);
 }
 
 /* ----------------------------------------------------------------------
@@ -1425,10 +1505,6 @@ void FixPEJumpAsync::grow_work()
 
 void FixPEJumpAsync::post_run()
 {
-  if (watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP)) {
-    if (scheme->any_changed(group_atoms())) changes_seen = 1;
-    refuse_velocity_changes();
-  }
   scheme->end_run(group_atoms(), nodes->tallied(true));
   // the fine clock as the run leaves it (atoms lost through a boundary
   // leave it too), for the next run to compare

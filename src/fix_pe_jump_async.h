@@ -101,21 +101,29 @@ class FixPEJumpAsync : public Fix {
   PEJump::AsyncClocks *clocks;
   PEJump::ClockAssignment *assign;
   PEJump::ClockClasses *classes;
-  PEJump::WorkForces *work;    // SUM: fine quadrature sum, COARSE: coarse quadrature sum
+  PEJump::WorkForces *work;
 
   // per-atom state fields: the sum of the fine forces on a slow atom over
   // the fine steps done in this coarse step (force x time) and (Lobatto
   // rules) the slow-interaction force at the coarse start node
-  int FACC, FSTART_COARSE;
+  // and (Lobatto rules) the half of the other fixes' impulse at the coarse
+  // node that the next coarse step begins with
+  // and the coarse quadrature sum of a slow atom's coarse interactions
+  int FACC, FSTART_COARSE, END_IMPULSE, FCOARSE;
 
-  int reinit_pending;           // redo the initial kick when all fix forces are in
   PEJump::Evaluations evals;    // force evaluations
   int changes_seen;             // another fix changed a velocity (this rank)
   double fine_speed2;           // largest |v|^2 of the moving atoms in this coarse step
   double fine_change;           // largest velocity change of an atom over a fine step
+  bool reverse_copy;            // the reverse communication sums COPY
+  bigint builds_inside;         // list builds inside coarse steps (this run)
 
-  enum { SUM, COARSE };
+  // SUM: fine quadrature sum, COPY: the coarse interactions' forces at the
+  // primary coarse node (owned and ghost atoms) apart from those that
+  // other fixes add
+  enum { SUM, COPY };
   void grow_work();
+  int needed_work() const;
   PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
   bool watch(int when) const;    // other fixes may change velocities then (OtherFixes hooks)
   PEJump::FreeFlight free_flight() const;    // inside the coarse step: all atoms in their steps
@@ -140,16 +148,18 @@ class FixPEJumpAsync : public Fix {
   void begin_coarse_step();
   void fine_steps_until(double nodes_in_fine_steps);
   void fine_step();
-  void check_fine_nodes(double into);
+  bool check_fine_nodes(double into);    // true if the lists must be built first
+  void build_lists_now();
   void move_moving(double dt);
   void hold_until(double t);    // the slow atoms outside fine interactions move to t
   void fine_quadrature_sum();
   void finish_fine_step(double **favg, double *mag);
-  void keep_coarse_primary();
+  void keep_coarse_primary(double **fcoarse);
+  double **coarse_forces_apart();
+  void end_impulse_first_half();
   void coarse_quadrature_sum();
   void slow_jumps(double *mag);
-  void predict_lists();
-  void finish_check(const double *local);
+  bool finish_check(const double *local);
   std::string instability_advice() const;
   void slow_magnitudes();
   double node_cost() const;
