@@ -8,6 +8,7 @@
 #include "exceptions.h"
 #include "fix.h"
 #include "force.h"
+#include "neighbor.h"
 #include "pair_lj_cut.h"
 #include "timer.h"
 #include "update.h"
@@ -590,6 +591,36 @@ TEST(PEJump, DampAutoSaysWhenItDamps)
   EXPECT_EQ(told("midpoint", "momentum 5 linear 1 1 1", 1), "");
   EXPECT_EQ(told("lobatto 2", "langevin 1.0 1.0 0.5 4711", 1), "");
   EXPECT_EQ(told("midpoint damp 0", "langevin 1.0 1.0 0.5 4711", 1), "");
+}
+
+/* ----------------------------------------------------------------------
+   a step that begins in the jump loop of the one before (nothing looks in
+   between) is the step begun at its start: the same positions and the
+   same list builds. A timeout keeps the fix from beginning steps ahead
+   (the run may end before the next step) and changes nothing else. With
+   neigh_modify once yes (LAMMPS checks no distances) a Lobatto step begun
+   ahead must measure its nodes where they are in the step, or it asks for
+   list builds that the step begun at its start does not
+------------------------------------------------------------------------- */
+
+TEST(PEJump, StepsBegunAheadCheckTheListsAsStepsBegunAtTheirStart)
+{
+  for (const std::string lists : {"once yes", "once no"}) {
+    std::vector<double> x[2];
+    LAMMPS_NS::bigint builds[2];
+    for (int timeout = 0; timeout < 2; ++timeout) {
+      Sim s;
+      lj_liquid(s, 5);
+      s.cmds({"neigh_modify " + lists, "fix int all pe_jump quadrature lobatto 3", "timestep 0.002",
+              "thermo 10"});
+      if (timeout) s.cmd("timer timeout 10:00:00 every 1");
+      s.cmd("run 300");
+      x[timeout] = positions(s);
+      builds[timeout] = s.lmp->neighbor->ncalls;
+    }
+    EXPECT_EQ(max_diff(x[0], x[1]), 0.0) << lists;
+    EXPECT_EQ(builds[0], builds[1]) << lists;
+  }
 }
 
 /* ----------------------------------------------------------------------
