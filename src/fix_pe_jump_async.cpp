@@ -881,16 +881,29 @@ bool FixPEJumpAsync::check_fine_nodes(double into)
   const double h = clocks->fine_step();
   const double lo = rule->node[rule->has_end_nodes() ? 1 : 0] * h - into;
   const double hi = rule->node.back() * h - into;
-  const double cp = rule->node[rule->primary()] * h - into;
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
-  const StabilityGuard::Nodes at{h, lo, hi, cp, nullptr, 0.0, 0.0, h, nullptr};
-  guard->measure(group_atoms(&assign->moving_atoms), free_flight(), scheme->jump(), xhold, at,
-                 local);
-  // the slow atoms' jumps and speeds change at coarse nodes only
-  local[1] = MAX(local[1], clocks->coarse_step() * clocks->coarse_step() * guard->slow_speed2());
-  local[3] = MAX(local[3], guard->slow_jump2());
-  local[4] = MAX(local[4], guard->slow_speed2());
+  guard->step(h);
+  if (guard->has_stats()) {
+    // speeds and jumps as the last fine step and coarse node left them;
+    // distances only where the moving atoms can have come near half the
+    // skin since they were last measured
+    const double coarse = clocks->coarse_step();
+    local[1] = MAX(h * h * guard->speed2(), coarse * coarse * guard->slow_speed2());
+    local[2] = MAX(h * h * guard->jump2(), coarse * coarse * guard->slow_jump2());
+    local[3] = MAX(guard->jump2(), guard->slow_jump2());
+    local[4] = MAX(guard->speed2(), guard->slow_speed2());
+    if (xhold)
+      local[0] =
+          guard->excursion_since(group_atoms(&assign->moving_atoms), free_flight(), xhold, lo, hi);
+    else
+      guard->forget_reach();
+  } else {
+    const double cp = rule->node[rule->primary()] * h - into;
+    const StabilityGuard::Nodes at{h, lo, hi, cp, nullptr, 0.0, 0.0, h, nullptr};
+    guard->measure(group_atoms(&assign->moving_atoms), free_flight(), scheme->jump(), xhold, at,
+                   local);
+  }
   return finish_check(local);
 }
 
@@ -1505,6 +1518,11 @@ int FixPEJumpAsync::needed_work() const
 
 void FixPEJumpAsync::post_run()
 {
+  bigint builds = 0;
+  MPI_Allreduce(&builds_inside, &builds, 1, MPI_LMP_BIGINT, MPI_MAX, world);
+  if (builds && (comm->me == 0))
+    utils::logmesg(lmp, "Fix {}: {} neighbor list builds inside coarse steps\n", style, builds);
+  builds_inside = 0;
   scheme->end_run(group_atoms(), nodes->tallied(true));
   // the fine clock as the run leaves it (atoms lost through a boundary
   // leave it too), for the next run to compare

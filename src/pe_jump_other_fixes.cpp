@@ -79,7 +79,12 @@ void OtherFixes::sort(ForceSampler &sampler)
       ++nthermostats;
       if (mask & POST_FORCE) ++nforcing;
     }
-    if (projects)
+    // fix enforce2d zeroes z components that the force field of a 2d run
+    // gives as zero (every z is 0): at the fix's own evaluations it acts
+    // only where the atoms carry rotation (omega, angmom, torque), not at
+    // the cost of a pass over all atoms at every one of them
+    const bool rotation = atom->omega_flag || atom->angmom_flag || atom->torque_flag;
+    if (projects && (rotation || !utils::strmatch(ifix->style, "^enforce2d")))
       projections.push_back(ifix);
     else if (mask & POST_FORCE)
       ++nadders;
