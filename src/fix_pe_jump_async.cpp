@@ -84,7 +84,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
     assign(nullptr), classes(nullptr), work(nullptr), changes_seen(0), fine_speed2(0.0),
-    fine_change(0.0), reverse_copy(false), builds_inside(0)
+    fine_change(0.0), reverse_copy(false), builds_inside(0), lists_forced(false), end_time(0.0)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -777,10 +777,17 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
                style);
   if (scheme->started) change_clocks();
   node_impulses();
+  lists_forced = guard->rebuild_forced();
   begin_coarse_step();
   const double primary = rule->node[rule->primary()];
   fine_steps_until(primary * clocks->steps());
   hold_until(primary * update->dt);
+  // the MD step's evaluation is at the primary coarse node: a force that
+  // depends on time (a variable of time, e.g. in fix addforce) must see the
+  // node's time, or its impulse is off by h_S F'/2 per step (first order).
+  // Put back as the MD step's evaluation is done
+  end_time = update->atime;
+  update->atime -= (1.0 - primary) * update->dt;
 }
 
 /* ----------------------------------------------------------------------
@@ -1036,6 +1043,7 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double *mag)
 
 void FixPEJumpAsync::final_integrate()
 {
+  update->atime = end_time;
   grow_work();
   if (watch(OtherFixes::INSIDE_STEP)) {
     if (scheme->any_changed(group_atoms())) changes_seen = 1;
@@ -1050,6 +1058,10 @@ void FixPEJumpAsync::final_integrate()
   slow_jumps(mag);
   guard->set_slow_stats(mag[0], mag[1]);
   if (END_IMPULSE >= 0) end_impulse_first_half();
+  // lists that LAMMPS built in this step whatever the atoms did (neigh_modify
+  // check no, a restart file written, a fix asking) are built again where a
+  // run continued after this step builds them: every atom at the step end
+  if (lists_forced && (neighbor->ago == 0)) build_lists_now();
 
   split->activate(InteractionSplit::ALL);
   // no other time integrator (refuse_other_fixes()): no atoms to leave out
@@ -1521,7 +1533,8 @@ void FixPEJumpAsync::post_run()
   bigint builds = 0;
   MPI_Allreduce(&builds_inside, &builds, 1, MPI_LMP_BIGINT, MPI_MAX, world);
   if (builds && (comm->me == 0))
-    utils::logmesg(lmp, "Fix {}: {} neighbor list builds inside coarse steps\n", style, builds);
+    utils::logmesg(lmp, "Fix {}: {} neighbor list builds by the fix (inside coarse steps)\n", style,
+                   builds);
   builds_inside = 0;
   scheme->end_run(group_atoms(), nodes->tallied(true));
   // the fine clock as the run leaves it (atoms lost through a boundary

@@ -117,6 +117,8 @@ class FixPEJumpAsync : public Fix {
   double fine_change;           // largest velocity change of an atom over a fine step
   bool reverse_copy;            // the reverse communication sums COPY
   bigint builds_inside;         // list builds inside coarse steps (this run)
+  bool lists_forced;            // LAMMPS builds the lists in this step whatever the atoms do
+  double end_time;              // update->atime of the coarse step's end
 
   // SUM: fine quadrature sum, COPY: the coarse interactions' forces at the
   // primary coarse node (owned and ghost atoms) apart from those that

@@ -84,7 +84,8 @@ void OtherFixes::sort(ForceSampler &sampler)
     // only where the atoms carry rotation (omega, angmom, torque), not at
     // the cost of a pass over all atoms at every one of them
     const bool rotation = atom->omega_flag || atom->angmom_flag || atom->torque_flag;
-    if (projects && (rotation || !utils::strmatch(ifix->style, "^enforce2d")))
+    if (projects && !rotation && utils::strmatch(ifix->style, "^enforce2d")) continue;
+    if (projects)
       projections.push_back(ifix);
     else if (mask & POST_FORCE)
       ++nadders;
