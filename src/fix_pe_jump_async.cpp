@@ -1170,6 +1170,18 @@ void FixPEJumpAsync::coarse_quadrature_sum()
   const int first = rule->has_end_nodes() ? 1 : 0;
   if (rule->size() - first <= 1) return;
   const double coarse = update->dt;
+  // the slow atoms' nodes inside the coarse step, away from where LAMMPS
+  // checked them (the primary node): lists built again at the step end
+  // where one of them would leave half the skin
+  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+  if (xhold) {
+    const double local = guard->excursion(group_atoms(&assign->slow_atoms), free_flight(), xhold,
+                                          (rule->node[first] - 1.0) * coarse, 0.0);
+    double worst = 0.0;
+    MPI_Allreduce(&local, &worst, 1, MPI_DOUBLE, MPI_MAX, world);
+    const double half_skin = 0.5 * neighbor->skin;
+    if (worst > half_skin * half_skin) build_lists_now();
+  }
   split->activate(InteractionSplit::COARSE);
   const int evaluated = nodes->sum_nodes(*rule, first, rule->primary(), coarse, -coarse,
                                          free_flight(), group_atoms(&assign->slow_atoms),
