@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -17,11 +18,13 @@ using namespace PEJumpTest;
 namespace {
 
 // runs a system: accelerator commands first, then the system, the fix and
-// the run; positions of all atoms by atom ID
+// a run of the given number of steps of the system's time step (fix
+// pe_jump/async K: steps/K coarse steps of K times the system's time
+// step); positions of all atoms by atom ID
 using Builder = std::function<void(Sim &)>;
 
 std::vector<double> accelerated_run(const std::string &accelerator, const Builder &system,
-                                    const std::string &fix, const std::string &run)
+                                    const std::string &fix, int steps)
 {
   Sim s;
   if (accelerator == "opt")
@@ -29,7 +32,11 @@ std::vector<double> accelerated_run(const std::string &accelerator, const Builde
   else if (!accelerator.empty())
     s.cmds({"package " + accelerator, "suffix omp"});
   system(s);
-  s.cmds({fix, "thermo 0", run});
+  std::smatch async;
+  const int K =
+      std::regex_search(fix, async, std::regex("pe_jump/async (\\d+)")) ? std::stoi(async[1]) : 1;
+  s.cmds({fix, fmt::format("timestep {:.17g}", K * s.lmp->update->dt), "thermo 0",
+          fmt::format("run {} post no", steps / K)});
   return positions(s);
 }
 
@@ -69,7 +76,7 @@ TEST(PEJumpAccelerators, SameTrajectoryWithOmpAndOptStyles)
     std::string name;
     Builder system;
     std::vector<std::string> fixes;
-    std::string run;
+    int steps;
   };
   const std::vector<Case> cases = {
       {"bonded crystal",
@@ -79,23 +86,23 @@ TEST(PEJumpAccelerators, SameTrajectoryWithOmpAndOptStyles)
         "fix 1 all pe_jump quadrature lobatto 3 sample bond",
         "fix 1 all pe_jump quadrature legendre 2 sample pair", "fix 1 all pe_jump/async 5 fast",
         "fix 1 all pe_jump/async 5 fast quadrature lobatto 3"},
-       "run 200 post no"},
+       200},
       {"LJ liquid",
        liquid,
        {"fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
         "fix 1 all pe_jump/async 4 fast quadrature lobatto 3"},
-       "run 200 post no"},
+       200},
       {"FPU chain",
        fpu,
        {"fix 1 chain pe_jump quadrature lobatto 3",
         "fix 1 chain pe_jump quadrature lobatto 3 sample bond",
         "fix 1 chain pe_jump/async 10 fast quadrature lobatto 5"},
-       "run 2000 post no"}};
+       2000}};
   for (const auto &c : cases) {
     for (const auto &fix : c.fixes) {
-      const auto plain = accelerated_run("", c.system, fix, c.run);
+      const auto plain = accelerated_run("", c.system, fix, c.steps);
       for (const std::string accelerator : {"omp 1", "omp 2", "opt"}) {
-        const auto accelerated = accelerated_run(accelerator, c.system, fix, c.run);
+        const auto accelerated = accelerated_run(accelerator, c.system, fix, c.steps);
         // the thread count changes the order of the force sums: round-off only
         EXPECT_LT(max_diff(plain, accelerated), 1e-10)
             << c.name << ": " << fix << " with " << accelerator;

@@ -795,12 +795,22 @@ TEST(PEJump, VelocityChangeRestartsSchemeWithLogMessage)
   // jump equals h F/m again, so the jump energy matches a fresh start
 }
 
+namespace {
+// the time step of fix pe_jump/async K is the coarse step of K fine steps:
+// K for it, 1 for the other fixes (the tests below that run both take the
+// same time with K times fewer steps of K times the step)
+int async_K(const std::string &fix)
+{
+  const auto at = fix.find("pe_jump/async ");
+  return (at == std::string::npos) ? 1 : std::stoi(fix.substr(at + 14));
+}
+}    // namespace
+
 /* ----------------------------------------------------------------------
    atoms deleted between runs: the jumps of their partners hold forces of
    interactions that are gone; the scheme restarts (log message), and the
    total momentum stays what it was, as with fix nve (with the stale jumps
-   it changed by about 1e-2). Both fixes; for pe_jump/async the deletion
-   falls on a coarse node and inside a coarse step
+   it changed by about 1e-2). Both fixes
 ------------------------------------------------------------------------- */
 
 TEST(PEJump, DeletedAtomsRestartTheScheme)
@@ -812,12 +822,14 @@ TEST(PEJump, DeletedAtomsRestartTheScheme)
   for (const std::string fix :
        {"fix 1 all nve", "fix 1 all pe_jump", "fix 1 all pe_jump quadrature lobatto 3",
         "fix 1 all pe_jump/async 5 fast", "fix 1 all pe_jump/async 5 fast quadrature lobatto 3"}) {
-    for (const int first : {505, 503}) {
+    const int K = async_K(fix);
+    for (const int first : {505 / K, 503 / K}) {
       Sim s(MPI_COMM_WORLD, false);
       lj_liquid(s);
       s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f", fix,
-              "timestep 0.002", "thermo 0", fmt::format("run {} post no", first),
-              "region gone sphere 5.5 5.5 5.5 0.8 units box", "delete_atoms region gone"});
+              fmt::format("timestep {}", 0.002 * K), "thermo 0",
+              fmt::format("run {} post no", first), "region gone sphere 5.5 5.5 5.5 0.8 units box",
+              "delete_atoms region gone"});
       ASSERT_LT(s.lmp->atom->natoms, 256) << fix;
       ::testing::internal::CaptureStdout();
       s.cmd("run 0 post no");
@@ -825,7 +837,7 @@ TEST(PEJump, DeletedAtomsRestartTheScheme)
       if (fix.find("pe_jump") != std::string::npos)
         EXPECT_THAT(out, ContainsRegex("atoms of the group were deleted")) << fix;
       const auto before = momentum(s);
-      s.cmd("run 20 post no");
+      s.cmd(fmt::format("run {} post no", 20 / K));
       const auto after = momentum(s);
       EXPECT_LT(max_diff(before, after), 1e-12) << fix << ", deleted after step " << first;
     }
@@ -834,18 +846,20 @@ TEST(PEJump, DeletedAtomsRestartTheScheme)
 
 namespace {
 // the LJ liquid with a fast sphere: the commands before, a change between
-// runs, then 20 steps, once with the fix continued (its log must say why
-// the scheme restarts) and once with the fix defined anew after the change;
-// the largest difference of the positions
+// runs, then 20 steps of 0.002 (pe_jump/async K: 20/K of 0.002 K), once
+// with the fix continued (its log must say why the scheme restarts) and
+// once with the fix defined anew after the change; the largest difference
+// of the positions
 double continued_against_redefined(const std::string &fix, const std::vector<std::string> &before,
                                    const std::string &change, const std::string &why)
 {
+  const int K = async_K(fix);
   std::vector<double> x[2];
   for (const int redefine : {0, 1}) {
     Sim s(MPI_COMM_WORLD, false);
     lj_liquid(s);
     s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
-            "fix 1 all " + fix, "timestep 0.002", "thermo 0"});
+            "fix 1 all " + fix, fmt::format("timestep {}", 0.002 * K), "thermo 0"});
     s.cmds(before);
     // a change of several commands is written with ';' between them
     for (std::size_t at = 0, end = 0; at < change.size(); at = end + 1) {
@@ -854,7 +868,7 @@ double continued_against_redefined(const std::string &fix, const std::vector<std
     }
     if (redefine) s.cmds({"unfix 1", "fix 1 all " + fix});
     ::testing::internal::CaptureStdout();
-    s.cmd("run 20 post no");
+    s.cmd(fmt::format("run {} post no", 20 / K));
     const std::string out = ::testing::internal::GetCapturedStdout();
     if (!redefine) EXPECT_THAT(out, ContainsRegex(why)) << fix;
     x[redefine] = unwrapped_positions(s);
@@ -876,7 +890,8 @@ TEST(PEJump, MinimizationBetweenRunsRestartsTheScheme)
   for (const std::string fix :
        {"pe_jump", "pe_jump quadrature lobatto 2", "pe_jump quadrature lobatto 3",
         "pe_jump/async 5 fast", "pe_jump/async 5 fast quadrature lobatto 3"})
-    EXPECT_LT(continued_against_redefined(fix, {"run 50 post no"}, "minimize 0 1e-8 20 20",
+    EXPECT_LT(continued_against_redefined(fix, {fmt::format("run {} post no", 50 / async_K(fix))},
+                                          "minimize 0 1e-8 20 20",
                                           "energy minimization since the last run"),
               1e-12)
         << fix;
@@ -901,13 +916,15 @@ TEST(PEJump, NewForceFieldBetweenRunsRestartsTheScheme)
        {"pe_jump", "pe_jump quadrature lobatto 2", "pe_jump quadrature lobatto 3",
         "pe_jump quadrature legendre 2", "pe_jump/async 5 fast",
         "pe_jump/async 5 fast quadrature lobatto 3"}) {
+    const int K = async_K(fix);
+    const std::string run50 = fmt::format("run {} post no", 50 / K);
     for (const std::string change :
          {"pair_coeff 1 1 1.5 1.0 2.5", "pair_style soft 1.0;pair_coeff 1 1 20.0",
           "pair_style lj/cut 2.2;pair_coeff 1 1 1.0 1.0 2.2"})
-      EXPECT_LT(continued_against_redefined(fix, {"run 50 post no"}, change, why), 1e-12)
+      EXPECT_LT(continued_against_redefined(fix, {run50}, change, why), 1e-12)
           << fix << ", " << change;
     // no energy in the thermo output: the fix asks for it at the run's last step
-    EXPECT_LT(continued_against_redefined(fix, {"thermo_style custom step temp", "run 50 post no"},
+    EXPECT_LT(continued_against_redefined(fix, {"thermo_style custom step temp", run50},
                                           "pair_coeff 1 1 1.5 1.0 2.5", why),
               1e-12)
         << fix;
@@ -915,11 +932,11 @@ TEST(PEJump, NewForceFieldBetweenRunsRestartsTheScheme)
     Sim s(MPI_COMM_WORLD, false);
     lj_liquid(s);
     s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
-            "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 50 post no",
+            "fix 1 all " + fix, fmt::format("timestep {}", 0.002 * K), "thermo 0", run50,
             "pair_coeff 1 1 1.0 1.0 2.5", "atom_modify sort 1 1.0", "run 0 post no",
             "atom_modify sort 1000 0.0"});
     ::testing::internal::CaptureStdout();
-    s.cmd("run 20 post no");
+    s.cmd(fmt::format("run {} post no", 20 / K));
     const std::string out = ::testing::internal::GetCapturedStdout();
     EXPECT_THAT(out, ::testing::Not(ContainsRegex("restarts"))) << fix;
   }
@@ -938,12 +955,13 @@ TEST(PEJump, ChangesAfterReadRestartRestartTheScheme)
   const std::string file = "pe_jump_census.restart";
   for (const std::string fix :
        {"pe_jump", "pe_jump quadrature lobatto 3", "pe_jump/async 5 fast"}) {
+    const int K = async_K(fix);
     {
       Sim s;
       lj_liquid(s);
       s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
-              "fix 1 all " + fix, "timestep 0.002", "thermo 0", "run 50 post no",
-              "write_restart " + file});
+              "fix 1 all " + fix, fmt::format("timestep {}", 0.002 * K), "thermo 0",
+              fmt::format("run {} post no", 50 / K), "write_restart " + file});
     }
     for (const std::string change : {"", "pair_coeff 1 1 1.5 1.0 2.5", "mass 1 1.5"}) {
       std::vector<double> x[2];
@@ -957,7 +975,7 @@ TEST(PEJump, ChangesAfterReadRestartRestartTheScheme)
           if (anew) s.cmd("unfix 1");
           if (!change.empty()) s.cmd(change);
           if (anew) s.cmd("fix 2 all " + fix);
-          s.cmd("run 20 post no");
+          s.cmd(fmt::format("run {} post no", 20 / K));
         } catch (LAMMPS_NS::LAMMPSException &e) {
           ADD_FAILURE() << e.what();
         }
@@ -1008,17 +1026,19 @@ TEST(PEJump, AtomsJoiningTheGroupRestartTheScheme)
 
 TEST(PEJump, AtomsMovedBetweenRunsRestartTheScheme)
 {
-  const std::vector<std::string> before = {"run 300 post no", "balance 1.0 shift x 5 1.1"};
   for (const std::string fix :
        {"pe_jump", "pe_jump quadrature lobatto 3", "pe_jump/async 5 fast"}) {
+    const int K = async_K(fix);
+    const std::vector<std::string> before = {fmt::format("run {} post no", 300 / K),
+                                             "balance 1.0 shift x 5 1.1"};
     {
       Sim s(MPI_COMM_WORLD, false);
       lj_liquid(s);
       s.cmds({"region f sphere 3.36 3.36 3.36 2.0 units box", "group fast region f",
-              "fix 1 all " + fix, "timestep 0.002", "thermo 0"});
+              "fix 1 all " + fix, fmt::format("timestep {}", 0.002 * K), "thermo 0"});
       s.cmds(before);
       ::testing::internal::CaptureStdout();
-      s.cmd("run 5 post no");
+      s.cmd(fmt::format("run {} post no", 5 / K));
       const std::string quiet = ::testing::internal::GetCapturedStdout();
       EXPECT_THAT(quiet, ::testing::Not(ContainsRegex("restarts"))) << fix;
     }
@@ -1333,17 +1353,21 @@ TEST(PEJump, DumpedForcesAreThoseAtTheDumpedPositions)
   for (const std::string fix :
        {"pe_jump", "pe_jump quadrature legendre 2", "pe_jump quadrature lobatto 3",
         "pe_jump/async 5 fast", "pe_jump/async 5 fast quadrature lobatto 3"}) {
+    // (pe_jump/async 5: the same times in coarse steps of 5 fine steps)
+    const int K = async_K(fix);
+    const std::string at = std::to_string(10 / K);
     Sim s;
     lj_liquid(s);
     const std::string file = "pe_jump_forces.dump";
-    s.cmds({"group fast id 1:40", "fix 1 all " + fix, "timestep 0.004", "thermo 100",
-            "dump d all custom 5 " + file + " id x y z fx fy fz",
-            "dump_modify d sort id format float %.17g", "run 20 post no", "undump d"});
-    // the forces of step 10 as dumped, then evaluated afresh there
+    s.cmds({"group fast id 1:40", "fix 1 all " + fix, fmt::format("timestep {}", 0.004 * K),
+            "thermo 100", fmt::format("dump d all custom {} {} id x y z fx fy fz", 5 / K, file),
+            "dump_modify d sort id format float %.17g", fmt::format("run {} post no", 20 / K),
+            "undump d"});
+    // the forces at t = 0.04 as dumped, then evaluated afresh there
     std::map<int, std::array<double, 3>> dumped;
     std::ifstream in(file);
     std::string line;
-    while (std::getline(in, line) && (line != "10")) continue;
+    while (std::getline(in, line) && (line != at)) continue;
     while (std::getline(in, line) && (line.rfind("ITEM: ATOMS", 0) != 0)) continue;
     for (int n = 0; n < s.lmp->atom->natoms && std::getline(in, line); ++n) {
       std::istringstream row(line);
@@ -1353,7 +1377,7 @@ TEST(PEJump, DumpedForcesAreThoseAtTheDumpedPositions)
       dumped[id] = {f[0], f[1], f[2]};
     }
     ASSERT_EQ(dumped.size(), s.lmp->atom->natoms) << fix;
-    s.cmds({"unfix 1", "read_dump " + file + " 10 x y z box no", "run 0 post no"});
+    s.cmds({"unfix 1", "read_dump " + file + " " + at + " x y z box no", "run 0 post no"});
     std::remove(file.c_str());
     double worst = 0.0, scale = 0.0;
     for (const auto &[id, f] : dumped)

@@ -628,8 +628,10 @@ TEST(PEJumpAsync, BadInputGivesClearErrors)
   EXPECT_THAT(error_of(with({"fix 1 all pe_jump/async 5 fast", "run_style respa 2 2"}), "run 1"),
               ContainsRegex("does not support run_style respa"));
   EXPECT_THAT(
-      error_of(with({"fix 1 all pe_jump/async 5 fast", "fix 2 all addforce 1 0 0"}), "run 1"),
-      ContainsRegex("cannot yet be combined with fix 2 \\(addforce\\)"));
+      error_of(with({"fix 1 all pe_jump/async 5 fast", "fix 2 all recenter INIT INIT INIT"}),
+               "run 1"),
+      ContainsRegex("cannot yet be combined with fix 2 \\(recenter\\), which acts on the atoms "
+                    "in initial_integrate"));
   const std::string sw = std::string(PEJUMP_LAMMPS_POTENTIALS) + "/Si.sw";
   const std::vector<std::string> silicon = {"units metal",
                                             "lattice diamond 5.431",
@@ -1039,9 +1041,9 @@ TEST(PEJumpAsync, VelocityChangesByOtherFixesAreRefused)
 }
 
 /* ----------------------------------------------------------------------
-   fix wall/reflect changes velocities inside a step: refused whether the
-   reflected atom is on the fine clock or on the coarse one, also when it
-   happens in the last step of the run
+   fix wall/reflect reverses velocities inside a coarse step: refused at
+   setup, whether the reflected atom is on the fine clock or on the coarse
+   one, also where it would reach the wall in the last step of the run
 ------------------------------------------------------------------------- */
 
 TEST(PEJumpAsync, WallReflectOnEitherClockIsRefused)
@@ -1065,7 +1067,9 @@ TEST(PEJumpAsync, WallReflectOnEitherClockIsRefused)
   // atom 1 reaches the wall at t = 0.5 (the end of step 5)
   for (const std::string fast : {"1", "2"})
     for (const int steps : {20, 6}) {
-      EXPECT_THAT(error_with(fast, steps), ContainsRegex("changed velocities during the run"))
+      EXPECT_THAT(error_with(fast, steps),
+                  ContainsRegex("cannot yet be combined with fix w \\(wall/reflect\\), which "
+                                "reverses velocities inside the coarse step"))
           << "fast group: atom " << fast << ", run " << steps;
     }
 }

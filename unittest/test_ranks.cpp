@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <regex>
 #include <tuple>
 
 using namespace PEJumpTest;
@@ -68,12 +69,16 @@ std::vector<std::string> half_filled_box(int nranks)
           "pair_coeff 1 1 1.0 1.0 2.5"};
 }
 
-// positions and velocities after a short run on nranks ranks, ordered by the
-// atoms' initial lattice positions (create_atoms numbers atoms differently on
-// different processor grids, so atom IDs cannot be used to match atoms);
-// filled on world rank 0 only
+// positions and velocities after a short run on nranks ranks (200 steps of
+// 0.005; for fix pe_jump/async K, whose time step is the coarse step,
+// 200/K steps of 0.005 K), ordered by the atoms' initial lattice positions
+// (create_atoms numbers atoms differently on different processor grids, so
+// atom IDs cannot be used to match atoms); filled on world rank 0 only
 std::vector<double> run_on(int nranks, const std::string &fix, bool bonded)
 {
+  std::smatch async;
+  const int K =
+      std::regex_search(fix, async, std::regex("pe_jump/async (\\d+)")) ? std::stoi(async[1]) : 1;
   std::vector<double> out;
   on_first_ranks(nranks, [&](MPI_Comm sub) {
     Sim s(sub);
@@ -91,7 +96,8 @@ std::vector<double> run_on(int nranks, const std::string &fix, bool bonded)
     std::vector<double> x0(3 * n), x(3 * n), v(3 * n);
     lammps_gather_atoms(s.lmp, "x", 1, 3, x0.data());
     s.cmds(after);
-    s.cmds({"timestep 0.005", "thermo 20", "run 200 post no"});
+    s.cmds({fmt::format("timestep {:.6g}", 0.005 * K), fmt::format("thermo {}", 20 / K),
+            fmt::format("run {} post no", std::lround(200.0 / K))});
     lammps_gather_atoms(s.lmp, "x", 1, 3, x.data());
     lammps_gather_atoms(s.lmp, "v", 1, 3, v.data());
     std::vector<int> order(n);
@@ -160,13 +166,13 @@ TEST(PEJumpRanks, LJLiquidSameOn1And2And4Ranks)
                // buffer layers of a dynamic group, taken at coarse nodes
                // without energy output (4.3e-3 apart on 4 ranks when they
                // were taken with ghost atoms still at the step's midpoint)
-               "region rr sphere 4 4 4 2.5 units box\ngroup dg dynamic all region rr every 5\n"
+               "region rr sphere 4 4 4 2.5 units box\ngroup dg dynamic all region rr every 1\n"
                "fix 1 all pe_jump/async 5 dg buffer 1",
                // a criterion that reads the neighbors, evaluated at coarse
                // nodes (the rank counts differed when the ghost atoms were
                // not brought to the node)
                "compute crd all coord/atom cutoff 1.3\nvariable few atom c_crd<11\n"
-               "group dg dynamic all var few every 5\nfix 1 all pe_jump/async 5 dg"},
+               "group dg dynamic all var few every 1\nfix 1 all pe_jump/async 5 dg"},
               false, 500, 5.0 * std::cbrt(4.0 / 0.8442));
 }
 
@@ -175,10 +181,11 @@ TEST(PEJumpRanks, BondedLatticeSameOn1And2And4Ranks)
   const double box = 6.0 * std::cbrt(1.0 / 0.5);
   const std::string core = "region core block 0 3 0 3 0 6 units lattice\n"
                            "group fast region core\n";
-  // a dynamic fast group whose region moves: atoms change clock at coarse nodes
-  const std::string moving = "variable xc equal 1.0+0.02*step\n"
+  // a dynamic fast group whose region moves: atoms change clock at coarse
+  // nodes (every step with K = 5)
+  const std::string moving = "variable xc equal 1.0+0.1*step\n"
                              "region mov sphere v_xc 3 3 2 units lattice\n"
-                             "group fast dynamic all region mov every 5\n";
+                             "group fast dynamic all region mov every 1\n";
   check_ranks({"fix 1 all nve", "fix 1 all pe_jump quadrature lobatto 3",
                "newton off\nfix 1 all pe_jump quadrature legendre 3",
                core + "fix 1 all pe_jump/async 5 fast quadrature lobatto 3",
@@ -299,6 +306,6 @@ TEST(PEJumpRanks, PairStyleProbesAreCollective)
           "create_atoms 1 box", "mass * 1.0", "region left block 0 2 INF INF INF INF",
           "set region left type 2", "velocity all create 1.0 4928", "pair_style lj/cut/comm 2.5",
           "pair_coeff * * 1.0 1.0 2.5", "group fast type 2", "fix 1 all pe_jump/async 4 fast",
-          "timestep 0.005", "thermo 0", "run 8 post no"});
-  EXPECT_EQ(s.lmp->update->ntimestep, 8);
+          "timestep 0.02", "thermo 0", "run 2 post no"});
+  EXPECT_EQ(s.lmp->update->ntimestep, 2);
 }
