@@ -488,10 +488,10 @@ TEST(PEJumpAsync, SplitRunsAndRestartsUnderNeighCheckNoAreExact)
    lists built every few steps whatever the atoms do (check no: every 5
    fine steps for K = 1, every 6 for K = 3), at a temperature where no pair
    leaves the skin in as many fine steps, give the trajectory of lists
-   checked every step: the build, at the MD step's force evaluation, must
-   leave every atom where it was (the slow atoms held during the fine
-   steps included; built with the coarse forces taken elsewhere, etotal
-   fell by 6.3e-4 at every build, K = 1 and 3)
+   checked every step: a build must leave every atom where the scheme has
+   it, the slow atoms held during the fine steps included (where they were
+   left elsewhere, the coarse forces were taken there and etotal fell by
+   6.3e-4 at every build, K = 1 and 3)
 ------------------------------------------------------------------------- */
 
 TEST(PEJumpAsync, ListsBuiltWhateverTheAtomsDoKeepTheTrajectory)
@@ -1304,7 +1304,7 @@ TEST(PEJumpAsync, ClockChangesConserveMomentum)
 
 /* ----------------------------------------------------------------------
    an end atom of a 3-atom chain of springs that changes clock at every
-   coarse node (the group is in the fast group at even steps), K odd: its
+   coarse node (it is in the fast group at even steps), K odd: its
    restarted jump must fit its new step. Positions at t = 2 against fix
    nve at h = 1e-4; second order as h_S halves (with the jumps of the
    changed atoms shifted by their mean change, the restart of a single
