@@ -811,7 +811,9 @@ void FixPEJumpAsync::begin_coarse_step()
 
 void FixPEJumpAsync::fine_steps_until(double u)
 {
-  while (clocks->done() + 1 <= u + SAME_NODE) fine_step();
+  // a fine step followed by another whole one here moves its atoms on to
+  // the next one's primary node in the same pass
+  while (clocks->done() + 1 <= u + SAME_NODE) fine_step(clocks->done() + 2 <= u + SAME_NODE);
   if (u - clocks->done() > SAME_NODE) {
     const double into = (u - clocks->done()) * clocks->fine_step();
     move_moving(into - clocks->into());
@@ -825,7 +827,7 @@ void FixPEJumpAsync::fine_steps_until(double u)
    fine clock, the fine impulse on the slow ones
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::fine_step()
+void FixPEJumpAsync::fine_step(bool next_ahead)
 {
   const double h = clocks->fine_step();
   const double into = clocks->into();
@@ -843,11 +845,13 @@ void FixPEJumpAsync::fine_step()
   split->restore();
 
   double mag[2] = {0.0, 0.0};
-  finish_fine_step((rule->size() > 1) ? work->get(SUM) : atom->f, mag);
+  const double ahead = next_ahead ? rule->node[rule->primary()] * h : -1.0;
+  finish_fine_step((rule->size() > 1) ? work->get(SUM) : atom->f, ahead, mag);
   fine_speed2 = MAX(fine_speed2, mag[0]);
   fine_change = MAX(fine_change, mag[1]);
   guard->set_stats(fine_speed2, fine_change);
   clocks->fine_step_done();
+  if (ahead > 0.0) clocks->moved_to(clocks->done() + rule->node[rule->primary()]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1011,12 +1015,13 @@ void FixPEJumpAsync::fine_quadrature_sum()
 
 /* ----------------------------------------------------------------------
    forces of the fine interactions known (favg): the atoms on the fine
-   clock jump and move on to the end of the fine step (and begin the next
-   inside the coarse step); of the slow atoms those in a fine interaction
-   move on and collect the fine impulse
+   clock jump and move on to the end of the fine step and begin the next
+   inside the coarse step (moving on by ahead into it, if ahead >= 0); of
+   the slow atoms those in a fine interaction move on as far and collect
+   the fine impulse
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::finish_fine_step(double **favg, double *mag)
+void FixPEJumpAsync::finish_fine_step(double **favg, double ahead, double *mag)
 {
   const double h = clocks->fine_step();
   double **x = atom->x;
@@ -1027,10 +1032,11 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double *mag)
   const bool fingerprint =
       watch(more ? OtherFixes::INSIDE_STEP : (OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP));
   scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
-                    {h, rest, more ? 0.0 : -1.0, fingerprint}, mag);
+                    {h, rest, more ? MAX(ahead, 0.0) : -1.0, fingerprint}, mag);
+  const double on = rest + MAX(ahead, 0.0);
   for (const int i : assign->slow_moving)
     for (int k = 0; k < 3; k++) {
-      x[i][k] += rest * v[i][k];
+      x[i][k] += on * v[i][k];
       facc[i][k] += h * favg[i][k];
     }
 }

@@ -149,13 +149,13 @@ class FixPEJumpAsync : public Fix {
   // the MD step evaluates the coarse interactions, then the rest
   void begin_coarse_step();
   void fine_steps_until(double nodes_in_fine_steps);
-  void fine_step();
+  void fine_step(bool next_ahead);       // ... and the next one whole here: begin it ahead
   bool check_fine_nodes(double into);    // true if the lists must be built first
   void build_lists_now();
   void move_moving(double dt);
   void hold_until(double t);    // the slow atoms outside fine interactions move to t
   void fine_quadrature_sum();
-  void finish_fine_step(double **favg, double *mag);
+  void finish_fine_step(double **favg, double ahead, double *mag);
   void keep_coarse_primary(double **fcoarse);
   double **coarse_forces_apart();
   void end_impulse_first_half();
