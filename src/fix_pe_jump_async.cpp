@@ -84,7 +84,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
     assign(nullptr), classes(nullptr), work(nullptr), changes_seen(0), fine_speed2(0.0),
-    fine_change(0.0), reverse_copy(false), builds_inside(0), lists_forced(false), end_time(0.0)
+    fine_change(0.0), reverse_copy(false), builds_inside(0), lists_forced(false), end_time(0.0),
+    impulse_at_start(false)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -228,6 +229,15 @@ void FixPEJumpAsync::node_impulses()
   if (END_IMPULSE < 0) return;
   double **v = atom->v;
   double **pending = state->vec(END_IMPULSE);
+  if (impulse_at_start) {
+    // (the first step of a new start: see start_scheme())
+    double **f = atom->f;
+    const double kick = 0.5 * update->dt * force->ftm2v;
+    for (int i = 0; i < atom->nlocal; i++)
+      for (int k = 0; k < 3; k++)
+        pending[i][k] = kick * scheme->inverse_mass_of(i) * (f[i][k] + pending[i][k]);
+    impulse_at_start = false;
+  }
   group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
     for (int k = 0; k < 3; k++) {
       v[i][k] += pending[i][k];
@@ -1406,6 +1416,17 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
     sampler->compute(ForceSampler::ALL, 0, 0);
     evals.total += 1.0;
     kick_with(atom->f);
+    // Lobatto rules: the first coarse step begins with half the impulse of
+    // the other fixes' forces at q^0, which all of them have added only
+    // when the first step begins (those defined after this fix act after
+    // its setup): the interactions' forces wait in END_IMPULSE until then
+    if (with_start && (END_IMPULSE >= 0) && others->add_forces()) {
+      double **pending = state->vec(END_IMPULSE);
+      double **f = atom->f;
+      for (int i = 0; i < atom->nlocal; i++)
+        for (int k = 0; k < 3; k++) pending[i][k] = -f[i][k];
+      impulse_at_start = true;
+    }
   } else {
     kick_with(atom->f);
   }

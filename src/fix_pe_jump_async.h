@@ -119,6 +119,7 @@ class FixPEJumpAsync : public Fix {
   bigint builds_inside;         // list builds inside coarse steps (this run)
   bool lists_forced;            // LAMMPS builds the lists in this step whatever the atoms do
   double end_time;              // update->atime of the coarse step's end
+  bool impulse_at_start;        // END_IMPULSE holds -F(q^0) until the first step
 
   // SUM: fine quadrature sum, COPY: the coarse interactions' forces at the
   // primary coarse node (owned and ghost atoms) apart from those that
