@@ -410,7 +410,7 @@ TEST(PEJumpHostile, AsyncRestartsBetweenRunsAreTold)
       EXPECT_THAT(out, Not(ContainsRegex("WARNING|ERROR"))) << first;
   }
   for (const int first : {10, 11})
-    for (const std::string other : {"quadrature lobatto 3", "K"}) {
+    for (const std::string other : {"quadrature lobatto 3", "quadrature legendre 2", "K"}) {
       const std::string file = "pe_jump_rule.restart";
       Sim s(MPI_COMM_WORLD, false);
       lj_liquid(s, 3);
@@ -418,11 +418,10 @@ TEST(PEJumpHostile, AsyncRestartsBetweenRunsAreTold)
       output_of(s,
                 {"run " + std::to_string(first) + " post no", "write_restart " + file, "clear",
                  "read_restart " + file, "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0 2.5"});
-      const std::string out =
-          output_of(s,
-                    {(other == "K") ? "fix 1 all pe_jump/async 2 fast"
-                                    : "fix 1 all pe_jump/async 4 fast quadrature lobatto 3",
-                     "run 2 post no"});
+      const std::string out = output_of(s,
+                                        {(other == "K") ? "fix 1 all pe_jump/async 2 fast"
+                                                        : "fix 1 all pe_jump/async 4 fast " + other,
+                                         "run 2 post no"});
       std::remove(file.c_str());
       EXPECT_THAT(out,
                   ContainsRegex((other == "K") ? "K differs from the restart file"
