@@ -26,6 +26,7 @@
 #include "domain.h"
 #include "error.h"
 #include "force.h"
+#include "group.h"
 #include "memory.h"
 #include "modify.h"
 #include "neigh_list.h"
@@ -34,7 +35,6 @@
 #include "pair.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_auto_quadrature.h"
-#include "pe_jump_first_group.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_options.h"
@@ -165,15 +165,36 @@ int FixPEJump::setmask()
   return mask;
 }
 
+/* ----------------------------------------------------------------------
+   with neigh_modify include LAMMPS clears the forces and checks the
+   distances of the atoms of the include group only: every atom that the
+   fix moves must be in it
+------------------------------------------------------------------------- */
+
+void FixPEJump::refuse_atoms_outside_include_group() const
+{
+  if (neighbor->includegroup <= 0) return;
+  const int includebit = group->bitmask[neighbor->includegroup];
+  const int *mask = atom->mask;
+  bigint local = 0, outside = 0;
+  for (int i = 0; i < atom->nlocal; i++)
+    if ((mask[i] & groupbit) && !(mask[i] & includebit)) ++local;
+  MPI_Allreduce(&local, &outside, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (outside > 0)
+    error->all(FLERR,
+               "Fix {} moves every atom of its group every step, but {} of them are not in the "
+               "neigh_modify include group {}: LAMMPS would neither clear their forces nor "
+               "check their distances. Remove neigh_modify include (and atom_modify first)",
+               style, outside, group->names[neighbor->includegroup]);
+}
+
 /* ---------------------------------------------------------------------- */
 
 void FixPEJump::init()
 {
   scheme->init(style);
   guard->refuse_zero_skin(style, rule->only_end_nodes(), "quadrature " + rule->name());
-  // with neigh_modify include LAMMPS clears and checks the include group
-  // only; pe_jump/async handles the atoms outside it
-  PEJump::FirstGroup(lmp).require_all(groupbit, style);
+  refuse_atoms_outside_include_group();
   if (steps->adapts()) refuse_step_counters();
 
   others->sort(*sampler);

@@ -142,6 +142,7 @@ class FixPEJump : public Fix {
   std::string instability_advice() const;
   void tell_largest_jump() const;    // in the log, when the run stops as unstable
   void tally_at_node();
+  void refuse_atoms_outside_include_group() const;
   void refuse_step_counters() const;
   void check_others_for_rule() const;
   void note_damping(bool from_now) const;

@@ -95,8 +95,7 @@ namespace PEJump {
     // the owned atoms whose forces compute() may change, if not all of
     // them: the first nfirst and those listed. While set, compute() clears
     // the forces of those (and of the ghosts) only, and NodeSampler::Keep
-    // keeps those only (see FirstGroup: the fine interactions under
-    // neigh_modify include)
+    // keeps those only (pe_jump/async: the atoms that move on fine steps)
     struct Touched {
       int nfirst;
       const std::vector<int> *after;
