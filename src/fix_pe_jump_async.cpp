@@ -779,16 +779,13 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 {
   // (after write_restart or write_data between runs without setup the
   // ghost atoms were rebuilt: the fine steps need lists that fit them)
-  if (scheme->awaits_setup() &&
-      scheme->check_run_without_setup(style, group_atoms(), assign->changed()))
-    error->all(FLERR,
-               "Fix {}: LAMMPS was initialized since the last run (write_restart, write_data, "
-               "...): start this run with setup (run N, not run N pre no)",
-               style);
+  const bool stale = scheme->awaits_setup() &&
+      scheme->check_run_without_setup(style, group_atoms(), assign->changed());
   if (scheme->started) change_clocks();
   node_impulses();
   lists_forced = guard->rebuild_forced();
   begin_coarse_step();
+  if (stale) build_lists_now();
   const double primary = rule->node[rule->primary()];
   fine_steps_until(primary * clocks->steps());
   hold_until(primary * update->dt);
@@ -979,6 +976,28 @@ void FixPEJumpAsync::build_lists_now()
 }
 
 /* ----------------------------------------------------------------------
+   every interaction is evaluated at the step end (energy output, dumped
+   forces), where no fine or coarse node was: the lists are built again
+   there if an atom lies beyond half the skin
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::lists_fit_step_end()
+{
+  double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
+  if (!xhold) return;
+  double **x = atom->x;
+  double local = 0.0, worst = 0.0;
+  group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) d2 += (x[i][k] - xhold[i][k]) * (x[i][k] - xhold[i][k]);
+    local = MAX(local, d2);
+  });
+  MPI_Allreduce(&local, &worst, 1, MPI_DOUBLE, MPI_MAX, world);
+  const double half_skin = 0.5 * neighbor->skin;
+  if (worst > half_skin * half_skin) build_lists_now();
+}
+
+/* ----------------------------------------------------------------------
    the MD step evaluates the coarse interactions at the primary coarse node
 ------------------------------------------------------------------------- */
 
@@ -1078,6 +1097,7 @@ void FixPEJumpAsync::final_integrate()
   // check no, a restart file written, a fix asking) are built again where a
   // run continued after this step builds them: every atom at the step end
   if (lists_forced && (neighbor->ago == 0)) build_lists_now();
+  if (nodes->step_end_evaluated()) lists_fit_step_end();
 
   split->activate(InteractionSplit::ALL);
   // no other time integrator (refuse_other_fixes()): no atoms to leave out
@@ -1505,7 +1525,7 @@ void FixPEJumpAsync::restart(char *buf)
   const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
       (static_cast<int>(list[2]) == rule->points());
   const int head = static_cast<int>(list[0]);
-  scheme->started = ((head & 1) != 0) && same_rule;
+  scheme->started = (head & 1) != 0;
   evals.total = list[3];
   if (head & 2) scheme->load_census(&list[12]);
   const auto restarts = [&](const std::string &why) {

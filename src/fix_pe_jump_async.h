@@ -153,6 +153,7 @@ class FixPEJumpAsync : public Fix {
   void fine_step(bool next_ahead);       // ... and the next one whole here: begin it ahead
   bool check_fine_nodes(double into);    // true if the lists must be built first
   void build_lists_now();
+  void lists_fit_step_end();
   void move_moving(double dt);
   void hold_until(double t);    // the slow atoms outside fine interactions move to t
   void fine_quadrature_sum();
