@@ -31,6 +31,7 @@ using namespace LAMMPS_NS::PEJump;
 
 static constexpr double STOP_GROWTH = 1.0e6;    // jump growth that is always instability
 static constexpr double HINT_GROWTH = 2.0;      // ... that is instability if atoms move far
+static constexpr int HINT_STEPS = 10;           // ... in this many steps in a row
 // jumps grown STOP_GROWTH-fold whose energy is below this share of the
 // kinetic energy grew with the motion (from a start at rest), not by
 // instability: they become the reference
@@ -45,7 +46,7 @@ static constexpr double POSITION_ROUNDING = DBL_EPSILON;
 
 StabilityGuard::StabilityGuard(LAMMPS *lmp) :
     Pointers(lmp), stats{0.0, 0.0}, slow{0.0, 0.0}, valid(false), jump_ref(0.0), last_growth(0.0),
-    trusted(false)
+    hinted(0), trusted(false)
 {
 }
 
@@ -58,6 +59,7 @@ void StabilityGuard::start_run(bool free_flight_only)
   reach.forget();
   all.forget();
   jump_ref = 0.0;
+  hinted = 0;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -251,8 +253,10 @@ void StabilityGuard::refuse_zero_skin(const char *style, bool evaluations_at_bui
    the scheme is unstable if the jumps have grown by more than STOP_GROWTH
    since the first steps of the run (the first step where anything moves),
    or by more than HINT_GROWTH while moving atoms (or their jumps) by more
-   than half the skin; a large step that is stable only needs a larger
-   skin. Otherwise a rebuild is due where the nodes leave half the skin.
+   than half the skin in HINT_STEPS steps in a row, or with steps beyond
+   half the skin: a hard collision that a step samples at its peak makes
+   a jump that moves an atom far for a step or two, an unstable scheme
+   keeps it; a large step that is stable only needs a larger skin. Otherwise a rebuild is due where the nodes leave half the skin.
 ------------------------------------------------------------------------- */
 
 StabilityGuard::Verdict StabilityGuard::judge(const double *global)
@@ -271,8 +275,11 @@ StabilityGuard::Verdict StabilityGuard::judge(const double *global)
   const double half_skin = 0.5 * neighbor->skin;
   const double limit = (half_skin > 0.0) ? half_skin * half_skin : BLOWUP;
   const bool large = (global[1] >= limit) || (global[2] >= limit);
-  if ((last_growth >= STOP_GROWTH) || (large && (last_growth >= HINT_GROWTH))) return UNSTABLE;
-  if (global[1] >= limit) return TOO_FAR;
+  hinted = (large && (last_growth >= HINT_GROWTH)) ? hinted + 1 : 0;
+  const bool too_far = (global[1] >= limit);
+  if ((last_growth >= STOP_GROWTH) || (hinted >= HINT_STEPS) || (hinted && too_far))
+    return UNSTABLE;
+  if (too_far) return TOO_FAR;
   if (global[0] > limit) return REBUILD;
   return FINE;
 }

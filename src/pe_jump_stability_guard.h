@@ -158,6 +158,7 @@ namespace PEJump {
     bool valid;
     double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
     double last_growth;
+    int hinted;          // steps in a row with grown jumps that move atoms far
     bool trusted;        // only the fix moves the atoms, with the speeds of the stats
     ReachBound reach;    // of the nodes of the atoms measured by excursion_since()
     ReachBound all;      // of all atoms, measured at coarse nodes
