@@ -7,7 +7,8 @@
                          [--sync dump.sync.wave] [--png wave-inhomogeneous.png]
 
 (--N, --hS_dx, --K must be those of the runs: the dump steps are converted
-to times with h_F = hS_dx/(N K).)
+to times with the runs' time steps, h_S = hS_dx/N for the async run, whose
+LAMMPS step is one coarse step, and h_F = h_S/K for the sync run.)
 
 The dumps hold "id x" every tout; node i = id - 1 has u_i = x - i.
 For every dumped time the script prints max_i |u_i - u(x_i, t)| against
@@ -103,23 +104,25 @@ def main():
     ap.add_argument("--png", default="wave-inhomogeneous.png")
     opts = ap.parse_args()
     N = opts.N
-    hF = opts.hS_dx / N / opts.K
+    hS = opts.hS_dx / N
+    hF = hS / opts.K
+    dt = {"async": hS, "sync": hF}    # the LAMMPS time step of each run
     sd = SemiDiscrete(N)
-    runs = [(name, read_dump(f)) for name, f in (("async", opts.fa), ("sync", opts.fs))
-            if os.path.exists(f)]
+    # frames keyed by their time t = step * dt (rounded, to match the runs)
+    runs = [(name, {round(st * dt[name], 9): fr for st, fr in read_dump(f).items()})
+            for name, f in (("async", opts.fa), ("sync", opts.fs)) if os.path.exists(f)]
     if not runs:
         raise SystemExit("no dump files found")
 
-    steps = sorted(runs[0][1])
+    times = sorted(set.intersection(*(set(fr) for _, fr in runs)))
     print(f"N = {N}, dx = {1.0 / N:g}; max over the nodes of |u_i - reference|")
     head = "| t |" + "".join(f" {n} vs PDE | {n} vs ODE |" for n, _ in runs)
     print(head)
     print("|---" * (1 + 2 * len(runs)) + "|")
-    for st in steps:
-        t = st * hF
+    for t in times:
         cells = []
         for name, fr in runs:
-            node, u = fr[st]
+            node, u = fr[t]
             inner = (node > 0) & (node < N)
             x = node[inner] / N
             e_pde = np.max(np.abs(u[inner] - u_pde(x, t)))
@@ -127,13 +130,12 @@ def main():
             cells += [f"{e_pde:.3e}", f"{e_ode:.3e}"]
         print(f"| {t:.2f} | " + " | ".join(cells) + " |")
 
-    nplot = len(steps)
+    nplot = len(times)
     fig, axes = plt.subplots(nplot, 1, figsize=(8, 1.7 * nplot + 0.6), sharex=True)
     xf = np.linspace(0.0, 1.0, 4001)
     name, fr = runs[0]
-    for ax, st in zip(np.atleast_1d(axes), steps):
-        t = st * hF
-        node, u = fr[st]
+    for ax, t in zip(np.atleast_1d(axes), times):
+        node, u = fr[t]
         ax.plot(xf, u_pde(xf, t), color="k", lw=0.8, label="exact (PDE)")
         ax.plot(sd.x, sd(t), color="tab:green", lw=0.8, label="exact semi-discrete (ODE)")
         ax.plot(node / N, u, ".", ms=2.5, color="tab:red", label=f"fix pe_jump/{name}" if name == "async" else "fix pe_jump")

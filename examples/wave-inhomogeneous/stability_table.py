@@ -15,7 +15,7 @@ Usage:
 The LAMMPS binary is taken from --lmp, else from the environment variable
 LMP, else ../../build/lmp if it exists, else `lmp` on the PATH.
 Only the Python standard library is needed. Serial runs, one at a time;
-with the defaults (24 runs) about 5 minutes on one core.
+with the defaults (24 runs) a few minutes on one core.
 """
 
 import argparse
@@ -74,8 +74,8 @@ def run(opts, tmp, ratio, K):
     text = open(log).read() if os.path.exists(log) else ""
     err = re.search(r"^ERROR.*unstable at step (\d+)", text + "\n" + res.stdout, re.M)
     if err:
-        step = int(err.group(1))
-        return "stop %d (%d)" % (step // K, step)
+        # one LAMMPS step of fix pe_jump/async is one coarse step
+        return "stop %d" % int(err.group(1))
     if res.returncode != 0 or "WAVE async" not in text:
         sys.exit("LAMMPS failed (%s):\n%s\n%s" % (" ".join(cmd), res.stdout[-2000:], text[-2000:]))
     rows = thermo_rows(text)
@@ -96,8 +96,8 @@ def main(argv):
     Ks = [int(k) for k in opts.K.split(",")]
 
     print("N = %d, %d coarse steps: 'ok x' = finished, x = max (H - H~)/|H~| at the"
-          " thermo outputs;\n'stop n (s)' = fix stopped with its instability error in"
-          " coarse step n (LAMMPS step s)\n" % (opts.N, opts.ncoarse))
+          " thermo outputs;\n'stop n' = fix stopped with its instability error in"
+          " coarse step (LAMMPS step) n\n" % (opts.N, opts.ncoarse))
     print("| h_S/dx | " + " | ".join("K = %d" % k for k in Ks) + " |")
     print("|---" * (1 + len(Ks)) + "|")
     with tempfile.TemporaryDirectory(prefix="pejump-wave-") as tmp:
