@@ -921,6 +921,13 @@ bool FixPEJumpAsync::check_fine_nodes(double into)
     const StabilityGuard::Nodes at{h, lo, hi, cp, nullptr, 0.0, 0.0, h, nullptr};
     guard->measure(group_atoms(&assign->moving_atoms), free_flight(), scheme->jump(), xhold, at,
                    local);
+    // the slow atoms' speeds and jumps as the coarse node left them (the
+    // reference of the jumps' growth holds both clocks)
+    const double coarse = clocks->coarse_step();
+    local[1] = MAX(local[1], coarse * coarse * guard->slow_speed2());
+    local[2] = MAX(local[2], coarse * coarse * guard->slow_jump2());
+    local[3] = MAX(local[3], guard->slow_jump2());
+    local[4] = MAX(local[4], guard->slow_speed2());
   }
   return finish_check(local);
 }
