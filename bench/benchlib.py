@@ -297,7 +297,8 @@ def write_chain_data(path, chains, a=5.0, spacing=9.0):
             "mobile": sum(1 for x in atoms if x[2] != 3)}
 
 
-def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345, soft_as_bonds=False):
+def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345, soft_as_bonds=False,
+                       perturb=None):
     """2d triangular spring lattice (spacing 1, periodic, nx*ny atoms, ny
     even) with a central disk holding a fraction frac of the atoms: the
     stiff inclusion. Springs between two inclusion atoms are bonds (stiff),
@@ -307,7 +308,11 @@ def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345, soft_as_bon
 
     soft_as_bonds=True: the soft springs are bonds too (bond type 1, the
     stiff ones bond type 2, "2 bond types"), for a lattice without a pair
-    style (bench/cost); the default writes the file as before."""
+    style (bench/cost); the default writes the file as before.
+
+    perturb: None, or a function (x, y) -> (ux, uy, vx, vy) of the arrays of
+    lattice positions, added to the positions and velocities after the
+    inclusion is chosen (bench/composite: a travelling pulse, with kT=0)."""
     assert ny % 2 == 0
     rng = np.random.default_rng(seed)
     h = math.sqrt(3.0) / 2.0
@@ -343,6 +348,10 @@ def write_lattice_data(path, nx, ny, frac=0.10, kT=1e-4, seed=12345, soft_as_bon
     v = rng.normal(0.0, math.sqrt(kT), size=(n, 2))
     v -= v.mean(axis=0)
     typ = np.where(inc, 2, 1)
+    if perturb is not None:
+        ux, uy, vx, vy = perturb(x, y)
+        x, y = x + ux, y + uy
+        v = v + np.column_stack((vx, vy))
     with open(path, "w") as f:
         f.write("PE-JUMP benchmark: triangular spring lattice with a stiff inclusion (bench/benchlib.py)\n\n")
         f.write(f"{n} atoms\n3 atom types\n{len(bonds)} bonds\n{2 if soft_as_bonds else 1} bond types\n\n")
