@@ -256,7 +256,8 @@ void StabilityGuard::refuse_zero_skin(const char *style, bool evaluations_at_bui
    than half the skin in HINT_STEPS steps in a row, or with steps beyond
    half the skin: a hard collision that a step samples at its peak makes
    a jump that moves an atom far for a step or two, an unstable scheme
-   keeps it; a large step that is stable only needs a larger skin. Otherwise a rebuild is due where the nodes leave half the skin.
+   keeps it; a large step that is stable only needs a larger skin.
+   Otherwise a rebuild is due where the nodes leave half the skin.
 ------------------------------------------------------------------------- */
 
 StabilityGuard::Verdict StabilityGuard::judge(const double *global)
