@@ -39,6 +39,7 @@
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_options.h"
 #include "pe_jump_other_fixes.h"
+#include "pe_jump_parasitic_damping.h"
 #include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_step_control.h"
@@ -623,7 +624,7 @@ void FixPEJump::final_integrate()
   else
     finish_step(favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
-  damping->set_history(damping->beta(h_step) > 0.0);
+  damping->done();
 
   if (rest != 0.0)
     tally_at_node();
@@ -663,13 +664,9 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
   const bool end_kick = split_primary() && keep_start;
   // parasitic damping: the jump is pulled towards the smooth jump at the
   // node, centred on it from this step's and the last step's impulses
-  const double beta = damping->beta(h_step);
-  double **dlast = (beta > 0.0) ? damping->impulses() : nullptr;
-  double **plast = damping->differences();
-  const bool history = damping->has_history();
-  constexpr double NONE = std::numeric_limits<double>::quiet_NaN();
-  if (!centre_kick && !end_kick && (beta == 0.0) && !fhist) {
-    scheme->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, fingerprint}, mag);
+  const PEJump::ParasiticDamping::Step *damp = damping->step(h_step);
+  if (!centre_kick && !end_kick && !fhist) {
+    scheme->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, fingerprint}, mag, damp);
     return;
   }
   double vv = mag[0], jj = mag[1];
@@ -684,14 +681,8 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
       if (centre_kick) vh[k] += 0.5 * dtfm * (f[i][k] - sampled[i][k]);
       x[i][k] += rest * vh[k];
       if (end_kick) vh[k] += 0.25 * dtfm * (f[i][k] - sampled[i][k]);
-      double d = dtfm * favg[i][k];
-      if (dlast) {
-        // (impulses kept as h <F>: the last step's size may differ)
-        const double dl = history ? dtfm * dlast[i][k] / h_step : NONE;
-        PEJump::ParasiticDamping::component(beta, d, dl, history ? plast[i][k] : NONE, jmp[k],
-                                            plast[i][k]);
-        dlast[i][k] = h_step * favg[i][k];
-      }
+      const double d = dtfm * favg[i][k];
+      if (damp) damp->pull(i, k, dtfm, favg[i][k], d, jmp[k]);
       vnew[k] = PEJump::TwoStep::jump_component(d, vh[k], jmp[k]);
       v[i][k] = vh[k];
       jump[i][k] = jmp[k];
@@ -790,7 +781,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
       sampler->has_projections();
   scheme->started = 1;
   steps->forget();
-  damping->set_history(false);
+  damping->forget_history();
   guard->forget_stats();
 }
 
@@ -1014,12 +1005,9 @@ void FixPEJump::finish_check(const double *local)
 
 void FixPEJump::note_damping(bool from_now) const
 {
-  if (comm->me != 0) return;
-  const std::string when = from_now ? fmt::format("from step {}", update->ntimestep)
-                                    : std::string("in this run");
-  utils::logmesg(
-      lmp, "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat acts)\n",
-      style, PEJump::ParasiticDamping::AUTO_STEPS, when);
+  if (comm->me == 0)
+    damping->note(lmp, style, from_now ? update->ntimestep : -1,
+                  PEJump::ParasiticDamping::AUTO_STEPS);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -51,6 +51,7 @@
 #include "pe_jump_interaction_split.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_other_fixes.h"
+#include "pe_jump_parasitic_damping.h"
 #include "pe_jump_quadrature.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_two_step.h"
@@ -77,15 +78,21 @@ using PEJump::StabilityGuard;
 static constexpr double SAME_NODE = 1.0e-9;
 // restart head bit: written with timestep = the coarse step
 static constexpr int COARSE_TIMESTEP = 16;
+// restart head bits of the parasitic damping: damp auto damps since a
+// velocity change, its per-atom fields follow the scheme's, and the last
+// fine and coarse steps were damped (the fields are valid)
+static constexpr int DAMP_KICKED = 32, DAMP_FIELDS = 64, DAMP_FINE = 128, DAMP_COARSE = 256;
+// the clocks of the parasitic damping's history
+static constexpr int FINE_CLOCK = 0, COARSE_CLOCK = 1;
 
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
-    scheme(nullptr), guard(nullptr), others(nullptr), split(nullptr), clocks(nullptr),
-    assign(nullptr), classes(nullptr), work(nullptr), changes_seen(0), fine_speed2(0.0),
-    fine_change(0.0), reverse_copy(false), builds_inside(0), lists_forced(false), end_time(0.0),
-    impulse_at_start(false)
+    scheme(nullptr), guard(nullptr), damping(nullptr), others(nullptr), split(nullptr),
+    clocks(nullptr), assign(nullptr), classes(nullptr), work(nullptr), changes_seen(0),
+    fine_speed2(0.0), fine_change(0.0), reverse_copy(false), builds_inside(0), lists_forced(false),
+    end_time(0.0), impulse_at_start(false)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -112,6 +119,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
   END_IMPULSE = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
   FCOARSE = state->add("fcoarse", 3, 0.0);
+  damping = new PEJump::ParasiticDamping(*state);
   assign = new ClockAssignment(lmp, this, arg[4], {opts.buffer_layers, opts.buffer_reach},
                                opts.fast_auto > 0.0);
   classes = new PEJump::ClockClasses(lmp, *state);
@@ -156,6 +164,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
   delete clocks;
   delete classes;
   delete assign;
+  delete damping;
   delete scheme;
   delete state;
   delete work;
@@ -195,6 +204,10 @@ void FixPEJumpAsync::init()
   split->start_run();
   assign->find_groups();
   split->set_fine_bit(assign->clock_bit());
+  // thermostats drive the parasitic mode on both clocks (see fix pe_jump;
+  // auto: over AUTO_STEPS coarse steps)
+  damping->init(opts.damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
+                others->thermostat_forces() > 0);
   maxexchange = state->values();
 }
 
@@ -226,6 +239,8 @@ void FixPEJumpAsync::post_neighbor()
 
 void FixPEJumpAsync::node_impulses()
 {
+  if (watch(OtherFixes::BETWEEN_STEPS) && scheme->any_changed(group_atoms()))
+    damping->impulse_here();
   if (END_IMPULSE < 0) return;
   double **v = atom->v;
   double **pending = state->vec(END_IMPULSE);
@@ -287,6 +302,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   slow_magnitudes();
   classes->label(*split, *assign, groupbit);
   log_steps();
+  if (damping->automatic_on() && !scheme->reading_snapshots()) note_damping(false);
 }
 
 /* ----------------------------------------------------------------------
@@ -333,8 +349,6 @@ void FixPEJumpAsync::refuse_keywords() const
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
   if (opts.compensate > 0)
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
-  if (opts.damp_time >= 0.0)
-    error->all(FLERR, "Fix pe_jump/async does not support the damp keyword yet");
   if (opts.sample_mask != ForceSampler::ALL)
     error->all(FLERR,
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
@@ -939,15 +953,30 @@ bool FixPEJumpAsync::check_fine_nodes(double into)
 
 bool FixPEJumpAsync::finish_check(const double *local)
 {
-  double none = 0.0;
-  return guard->conclude(
-      style, local, none,
+  // (with them, whether another fix changed a velocity at the coarse node:
+  // damp auto damps the parasitic mode from then on)
+  double impulse = damping->take_impulse();
+  const bool rebuild = guard->conclude(
+      style, local, impulse,
       [&]() {
         return scheme->energies(group_atoms());
       },
       [&]() {
         return instability_advice();
       });
+  if (damping->impulse_anywhere(impulse > 0.0)) note_damping(true);
+  return rebuild;
+}
+
+/* ----------------------------------------------------------------------
+   damp auto damps in this run, or from this step on: the log says so
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::note_damping(bool from_now) const
+{
+  if (comm->me == 0)
+    damping->note(lmp, style, from_now ? update->ntimestep : -1,
+                  PEJump::ParasiticDamping::AUTO_STEPS);
 }
 
 /* ----------------------------------------------------------------------
@@ -1068,7 +1097,9 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double ahead, double *mag)
   const bool fingerprint =
       watch(more ? OtherFixes::INSIDE_STEP : (OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP));
   scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
-                    {h, rest, more ? MAX(ahead, 0.0) : -1.0, fingerprint}, mag);
+                    {h, rest, more ? MAX(ahead, 0.0) : -1.0, fingerprint}, mag,
+                    damping->step(h, FINE_CLOCK));
+  damping->done(FINE_CLOCK);
   const double on = rest + MAX(ahead, 0.0);
   for (const int i : assign->slow_moving)
     for (int k = 0; k < 3; k++) {
@@ -1247,15 +1278,26 @@ void FixPEJumpAsync::slow_jumps(double *mag)
   const double coarse = update->dt;
   const double kick = 2.0 * coarse * force->ftm2v;
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
+  const PEJump::ParasiticDamping::Step *damp = damping->step(coarse, COARSE_CLOCK);
+  // (the masses looked up here and the magnitudes kept in registers: this
+  // loop over the slow atoms is a large part of a coarse step's own work)
+  const double *rmass = atom->rmass;
+  const double *minv = scheme->inverse_masses();
+  const int *type = atom->type;
+  double most[2] = {mag[0], mag[1]};
   for (const int i : assign->slow_atoms) {
     double fslow[3];
     for (int k = 0; k < 3; k++) {
       fslow[k] = facc[i][k] / coarse + fcoarse[i][k];
       facc[i][k] = 0.0;
     }
-    PEJump::TwoStep::jump_one(kick * scheme->inverse_mass_of(i), fslow, v[i], jump[i], mag);
+    const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
+    PEJump::TwoStep::jump_one(dtfm, fslow, v[i], jump[i], most, damp, i);
     if (fingerprint) scheme->mark(i);
   }
+  mag[0] = most[0];
+  mag[1] = most[1];
+  damping->done(COARSE_CLOCK);
 }
 
 /* ----------------------------------------------------------------------
@@ -1391,7 +1433,10 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
 {
   AtomList changed;
   for (int i = 0; i < atom->nlocal; i++)
-    if (to_fine[i] && (atom->mask[i] & groupbit)) changed.push_back(i);
+    if (to_fine[i] && (atom->mask[i] & groupbit)) {
+      changed.push_back(i);
+      damping->forget(i);    // (its history is the other clock's)
+    }
   const PEJump::AtomSet atoms = group_atoms(&changed);
   double before[2], after[2];
   scheme->energies_now(atoms, before);
@@ -1458,6 +1503,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
     kick_with(atom->f);
   }
   scheme->started = 1;
+  damping->forget_history();
   guard->forget_stats();
 }
 
@@ -1509,8 +1555,12 @@ void FixPEJumpAsync::write_restart(FILE *fp)
 {
   // (+ 2: the census follows, + 4: and the buffer's reach, + 8: the fast
   // group is dynamic, + 16: the time step is the coarse step)
+  const int damp = (damping->kicked() ? DAMP_KICKED : 0) +
+      (damping->allocated() ? DAMP_FIELDS : 0) +
+      (damping->has_history(FINE_CLOCK) ? DAMP_FINE : 0) +
+      (damping->has_history(COARSE_CLOCK) ? DAMP_COARSE : 0);
   double list[NGLOBAL] = {((scheme->started > 0) ? 1.0 : 0.0) + 2.0 + 4.0 +
-                              (assign->dynamic_group() ? 8.0 : 0.0) + COARSE_TIMESTEP,
+                              (assign->dynamic_group() ? 8.0 : 0.0) + COARSE_TIMESTEP + damp,
                           static_cast<double>(rule->family()), static_cast<double>(rule->points()),
                           evals.total};
   assign->save(&list[9], &list[4], &list[23]);
@@ -1554,6 +1604,10 @@ void FixPEJumpAsync::restart(char *buf)
   if (static_cast<int>(list[6]) != clocks->steps()) restarts("K differs from the restart file");
   assign->restore(&list[9], &list[4], (head & 4) ? &list[23] : nullptr);
   if (head & 8) assign->restored_from_dynamic();
+  damping->set_kicked((head & DAMP_KICKED) != 0);
+  if (head & DAMP_FIELDS) damping->allocate();
+  damping->set_history(((head & DAMP_FINE) != 0) && scheme->started, FINE_CLOCK);
+  damping->set_history(((head & DAMP_COARSE) != 0) && scheme->started, COARSE_CLOCK);
 }
 
 /* ----------------------------------------------------------------------

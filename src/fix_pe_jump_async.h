@@ -36,6 +36,7 @@ namespace PEJump {
   class ForceSampler;
   class InteractionSplit;
   class OtherFixes;
+  class ParasiticDamping;
   class Quadrature;
   class StabilityGuard;
   class TwoStep;
@@ -86,7 +87,7 @@ class FixPEJumpAsync : public Fix {
 
   // the parts: the keywords, the quadrature rule, force evaluation, node
   // sampling, per-atom state, the scheme's updates, the stability guard,
-  // what other fixes do, the split of the interactions, where the clocks
+  // the damping of the parasitic mode, what other fixes do, the split of the interactions, where the clocks
   // are inside the coarse step, which atom is on which clock, and the
   // work arrays
   PEJump::Options opts;
@@ -96,6 +97,7 @@ class FixPEJumpAsync : public Fix {
   PEJump::AtomState *state;
   PEJump::TwoStep *scheme;
   PEJump::StabilityGuard *guard;
+  PEJump::ParasiticDamping *damping;
   PEJump::OtherFixes *others;
   PEJump::InteractionSplit *split;
   PEJump::AsyncClocks *clocks;
@@ -145,6 +147,7 @@ class FixPEJumpAsync : public Fix {
   void continue_scheme();
   void node_impulses();
   void refuse_velocity_changes();    // an error if another fix changed a velocity
+  void note_damping(bool from_now) const;
 
   // one coarse step: the fine steps up to the primary coarse node, where
   // the MD step evaluates the coarse interactions, then the rest

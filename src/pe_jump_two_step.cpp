@@ -195,28 +195,41 @@ void TwoStep::open(const AtomSet &set, bool fingerprint) const
 
 /* ---------------------------------------------------------------------- */
 
-void TwoStep::jump_loop(const AtomSet &set, double **favg, const Loop &step, double *mag) const
+void TwoStep::jump_loop(const AtomSet &set, double **favg, const Loop &step, double *mag,
+                        const ParasiticDamping::Step *damp) const
 {
   // the options are fixed for the whole loop: one instance each, so that
   // the inner loop carries no tests (it is the fine steps' per-atom cost)
   const bool ahead = step.ahead >= 0.0;
-  if (ahead && !step.fingerprint)
-    jump_loop_as<true, false>(set, favg, step, mag);
-  else if (!ahead && !step.fingerprint)
-    jump_loop_as<false, false>(set, favg, step, mag);
-  else if (!ahead)
-    jump_loop_as<false, true>(set, favg, step, mag);
-  else
-    jump_loop_as<true, true>(set, favg, step, mag);
+  const int which = (ahead ? 1 : 0) + (step.fingerprint ? 2 : 0) + (damp ? 4 : 0);
+  switch (which) {
+    case 0:
+      return jump_loop_as<false, false, false>(set, favg, step, mag, damp);
+    case 1:
+      return jump_loop_as<true, false, false>(set, favg, step, mag, damp);
+    case 2:
+      return jump_loop_as<false, true, false>(set, favg, step, mag, damp);
+    case 3:
+      return jump_loop_as<true, true, false>(set, favg, step, mag, damp);
+    case 4:
+      return jump_loop_as<false, false, true>(set, favg, step, mag, damp);
+    case 5:
+      return jump_loop_as<true, false, true>(set, favg, step, mag, damp);
+    case 6:
+      return jump_loop_as<false, true, true>(set, favg, step, mag, damp);
+    default:
+      return jump_loop_as<true, true, true>(set, favg, step, mag, damp);
+  }
 }
 
 /* ----------------------------------------------------------------------
-   AHEAD: the next step begins (step.ahead >= 0), SIGN: fingerprints; each
-   only tested at run time where the instance does not fix it
+   AHEAD: the next step begins (step.ahead >= 0), SIGN: fingerprints,
+   DAMP: the jumps are damped (damp)
 ------------------------------------------------------------------------- */
 
-template <bool AHEAD, bool SIGN>
-void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, double *mag) const
+template <bool AHEAD, bool SIGN, bool DAMP>
+void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, double *mag,
+                           const ParasiticDamping::Step *damp) const
 {
   double **x = atom->x;
   double **v = atom->v;
@@ -240,7 +253,9 @@ void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, 
     double xn[3], vnew[3];
     for (int k = 0; k < 3; k++) {
       xn[k] = xi[k] + rest * vh[k];
-      vnew[k] = jump_component(dtfm * fi[k], vh[k], jmp[k]);
+      const double d = dtfm * fi[k];
+      if (DAMP) damp->pull(i, k, dtfm, fi[k], d, jmp[k]);
+      vnew[k] = jump_component(d, vh[k], jmp[k]);
       if (AHEAD && ahead) {
         vh[k] += 0.5 * jmp[k];
         xn[k] += dt_ahead * vh[k];

@@ -15,6 +15,7 @@
 #define LMP_PE_JUMP_TWO_STEP_H
 
 #include "pe_jump_node_sampler.h"
+#include "pe_jump_parasitic_damping.h"
 
 #include <functional>
 #include <string>
@@ -112,11 +113,17 @@ namespace PEJump {
 
     // an atom (velocity v its v^{n+1/2}, jump jmp) jumps with the
     // quadrature sum favg of its forces over a step h, dtfm = 2 h ftm2v / m;
-    // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
-    static void jump_one(double dtfm, const double *favg, double *v, double *jmp, double *mag)
+    // mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far; damp: the
+    // step's parasitic damping (nullptr: none), i the atom's index
+    static void jump_one(double dtfm, const double *favg, double *v, double *jmp, double *mag,
+                         const ParasiticDamping::Step *damp = nullptr, int i = 0)
     {
       double vnew[3];
-      for (int k = 0; k < 3; k++) vnew[k] = jump_component(dtfm * favg[k], v[k], jmp[k]);
+      for (int k = 0; k < 3; k++) {
+        const double d = dtfm * favg[k];
+        if (damp) damp->pull(i, k, dtfm, favg[k], d, jmp[k]);
+        vnew[k] = jump_component(d, v[k], jmp[k]);
+      }
       mag[0] = MAX(mag[0], vnew[0] * vnew[0] + vnew[1] * vnew[1] + vnew[2] * vnew[2]);
       mag[1] = MAX(mag[1], jmp[0] * jmp[0] + jmp[1] * jmp[1] + jmp[2] * jmp[2]);
     }
@@ -125,12 +132,13 @@ namespace PEJump {
     // the atoms of set jump with favg over the step h and move on by rest
     // (from the primary node to the step end); fingerprints if asked; with
     // ahead >= 0 the next step begins and moves by ahead in the same pass,
-    // with the same operations
+    // with the same operations; damp: the step's parasitic damping
     struct Loop {
       double h, rest, ahead;
       bool fingerprint;
     };
-    void jump_loop(const AtomSet &, double **favg, const Loop &, double *mag) const;
+    void jump_loop(const AtomSet &, double **favg, const Loop &, double *mag,
+                   const ParasiticDamping::Step *damp = nullptr) const;
 
     void mark(int i) const;    // the fingerprint of atom->v[i]
     void mark_all(const AtomSet &) const;
@@ -149,8 +157,9 @@ namespace PEJump {
     void energies_now(const AtomSet &, double *e) const;
 
    private:
-    template <bool AHEAD, bool SIGN>
-    void jump_loop_as(const AtomSet &, double **favg, const Loop &, double *mag) const;
+    template <bool AHEAD, bool SIGN, bool DAMP>
+    void jump_loop_as(const AtomSet &, double **favg, const Loop &, double *mag,
+                      const ParasiticDamping::Step *damp) const;
     AtomState &state;
     int JUMP, VSIG, FSTART;
     std::vector<double> inverse_mass;

@@ -34,16 +34,17 @@ std::string error_from(Sim &s, const std::string &command)
   return "no error";
 }
 
-// an LJ liquid of 864 atoms (density 0.8442) in which one atom in ten is
-// light (mass 1/25, type 2, group fast: 5 times the speed of the others),
+// an LJ liquid of 864 atoms (density 0.8442) in which one atom in ten (or
+// light_fraction) is light (mass 1/25, type 2, group fast: 5 times the
+// speed of the others),
 // on the fine clock of K = 5 with the coarse step 0.005
-void light_atoms(Sim &s, const std::string &rule)
+void light_atoms(Sim &s, const std::string &rule, double light_fraction = 0.1)
 {
   s.cmds({"units lj", "atom_style atomic", "atom_modify map array", "lattice fcc 0.8442",
           "region box block 0 6 0 6 0 6", "create_box 2 box", "create_atoms 1 box", "mass 1 1.0",
-          "mass 2 0.04", "set type 1 type/fraction 2 0.1 12345", "group fast type 2",
-          "group slow type 1", "velocity all create 1.0 87287 loop geom", "pair_style lj/cut 2.5",
-          "pair_coeff * * 1.0 1.0 2.5", "neighbor 0.3 bin",
+          "mass 2 0.04", fmt::format("set type 1 type/fraction 2 {} 12345", light_fraction),
+          "group fast type 2", "group slow type 1", "velocity all create 1.0 87287 loop geom",
+          "pair_style lj/cut 2.5", "pair_coeff * * 1.0 1.0 2.5", "neighbor 0.3 bin",
           "neigh_modify every 1 delay 0 check yes",
           "fix 1 all pe_jump/async 5 fast quadrature " + rule, "timestep 0.005"});
 }
@@ -120,24 +121,31 @@ TEST(PEJumpAsyncOtherFixes, SetforceHoldsTheEnds)
    fix langevin's force is an impulse at the primary coarse node on every
    atom: the light atoms on the fine clock and the heavy ones on the coarse
    clock both reach the target (lobatto 3: the impulse split about the end
-   node, velocity Verlet, has no h_S/(2 damp) term). Mean over 3000 coarse
-   steps after 500: within 3 % of T = 1 (about 2.5 standard errors for
-   the 86 light atoms)
+   node, velocity Verlet, has no h_S/(2 damp) term), and damp auto keeps
+   the jumps that its random impulses drive bounded. Three light atoms in
+   ten (259), temperatures without the centre-of-mass correction of
+   compute temp (a group's centre of mass is free: with it the 86 light
+   atoms of one in ten read 1.2 % hot). Mean over 6000 coarse steps after
+   500 (four seeds: within 0.007 of T = 1); the jump energy of the last
+   tenth against that of the first
 ------------------------------------------------------------------------- */
 
 TEST(PEJumpAsyncOtherFixes, LangevinHeatsBothClocksToTheTarget)
 {
   Sim s;
-  light_atoms(s, "lobatto 3");
+  light_atoms(s, "lobatto 3", 0.3);
   s.cmds({"velocity all create 0.5 4928 loop geom", "fix 2 all langevin 1.0 1.0 0.5 48279",
-          "compute tfast fast temp", "compute tslow slow temp", "thermo 0", "run 500 post no",
-          "reset_timestep 0", "fix ave all ave/time 10 300 3000 c_tfast c_tslow",
-          "run 3000 post no"});
+          "compute tfast fast temp", "compute tslow slow temp", "compute_modify tfast extra/dof 0",
+          "compute_modify tslow extra/dof 0", "thermo 0", "run 500 post no", "reset_timestep 0",
+          "fix ave all ave/time 10 600 6000 c_tfast c_tslow",
+          "fix jump all ave/time 10 60 600 f_1[2] mode scalar ave window 1", "run 600 post no"});
+  const double early = s.eval("f_jump");
+  s.cmd("run 5400 post no");
   const double fast = s.eval("f_ave[1]"), slow = s.eval("f_ave[2]");
-  EXPECT_NEAR(fast, 1.0, 0.03);
-  EXPECT_NEAR(slow, 1.0, 0.03);
-  // the jumps stay bounded: their energy a small share of the kinetic
-  EXPECT_LT(s.vec("1", 1), 0.05 * s.eval("ke*atoms"));
+  EXPECT_NEAR(fast, 1.0, 0.02);
+  EXPECT_NEAR(slow, 1.0, 0.02);
+  // the jumps stay bounded (undamped they grow 2.2-fold here)
+  EXPECT_NEAR(s.eval("f_jump") / early, 1.0, 0.2) << s.eval("f_jump") / early;
 }
 
 /* ----------------------------------------------------------------------
