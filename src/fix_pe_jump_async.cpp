@@ -1279,24 +1279,28 @@ void FixPEJumpAsync::slow_jumps(double *mag)
   const double kick = 2.0 * coarse * force->ftm2v;
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
   const PEJump::ParasiticDamping::Step *damp = damping->step(coarse, COARSE_CLOCK);
-  // (the masses looked up here and the magnitudes kept in registers: this
-  // loop over the slow atoms is a large part of a coarse step's own work)
+  // (the masses looked up here, the magnitudes kept in registers and the
+  // fine impulses scaled by a product: this loop over the slow atoms is a
+  // large part of a coarse step's own work)
   const double *rmass = atom->rmass;
   const double *minv = scheme->inverse_masses();
   const int *type = atom->type;
-  double most[2] = {mag[0], mag[1]};
+  const double per_time = 1.0 / coarse;
+  double vv = mag[0], jj = mag[1];
   for (const int i : assign->slow_atoms) {
-    double fslow[3];
+    double fslow[3], most[2] = {0.0, 0.0};
     for (int k = 0; k < 3; k++) {
-      fslow[k] = facc[i][k] / coarse + fcoarse[i][k];
+      fslow[k] = facc[i][k] * per_time + fcoarse[i][k];
       facc[i][k] = 0.0;
     }
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
     PEJump::TwoStep::jump_one(dtfm, fslow, v[i], jump[i], most, damp, i);
+    vv = MAX(vv, most[0]);
+    jj = MAX(jj, most[1]);
     if (fingerprint) scheme->mark(i);
   }
-  mag[0] = most[0];
-  mag[1] = most[1];
+  mag[0] = vv;
+  mag[1] = jj;
   damping->done(COARSE_CLOCK);
 }
 
