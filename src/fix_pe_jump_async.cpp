@@ -49,6 +49,7 @@
 #include "pe_jump_clock_assignment.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_interaction_split.h"
+#include "pe_jump_moving_ghosts.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_other_fixes.h"
 #include "pe_jump_parasitic_damping.h"
@@ -89,10 +90,10 @@ static constexpr int FINE_CLOCK = 0, COARSE_CLOCK = 1;
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
-    scheme(nullptr), guard(nullptr), damping(nullptr), others(nullptr), split(nullptr),
-    clocks(nullptr), assign(nullptr), classes(nullptr), work(nullptr), changes_seen(0),
-    fine_speed2(0.0), fine_change(0.0), reverse_copy(false), builds_inside(0), lists_forced(false),
-    end_time(0.0), impulse_at_start(false)
+    scheme(nullptr), guard(nullptr), damping(nullptr), ghosts(nullptr), others(nullptr),
+    split(nullptr), clocks(nullptr), assign(nullptr), classes(nullptr), work(nullptr),
+    changes_seen(0), fine_speed2(0.0), fine_change(0.0), reverse_copy(false), builds_inside(0),
+    lists_forced(false), end_time(0.0), impulse_at_start(false)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -120,6 +121,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   END_IMPULSE = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
   FCOARSE = state->add("fcoarse", 3, 0.0);
   damping = new PEJump::ParasiticDamping(*state);
+  ghosts = new PEJump::MovingGhosts(lmp, this);
   assign = new ClockAssignment(lmp, this, arg[4], {opts.buffer_layers, opts.buffer_reach},
                                opts.fast_auto > 0.0);
   classes = new PEJump::ClockClasses(lmp, *state);
@@ -164,6 +166,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
   delete clocks;
   delete classes;
   delete assign;
+  delete ghosts;
   delete damping;
   delete scheme;
   delete state;
@@ -212,15 +215,26 @@ void FixPEJumpAsync::init()
 }
 
 /* ----------------------------------------------------------------------
+   the interactions split for the clocks, the atoms sorted by what they do
+   on fine steps, and the ghost copies told which atoms move on them
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::sort_by_clock()
+{
+  split->build();
+  assign->find_slow(*split);
+  assign->find_moving(*split);
+  if (ghosts->usable()) ghosts->mark(assign->moving());
+}
+
+/* ----------------------------------------------------------------------
    the lists were rebuilt (every atom at the same time): split them again
 ------------------------------------------------------------------------- */
 
 void FixPEJumpAsync::post_neighbor()
 {
   split->check_topology();
-  split->build();
-  assign->find_slow(*split);
-  assign->find_moving(*split);
+  sort_by_clock();
   // a slow atom outside fine interactions has no fine force: a Lobatto
   // start node of its fine steps, should it join one, is zero
   double **fstart = scheme->fstart();
@@ -624,12 +638,14 @@ void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 
 /* ----------------------------------------------------------------------
    communication for the clock assignment: the fine clock of the ghost
-   atoms (forward), flags set on ghosts (reverse)
+   atoms (forward), flags set on ghosts (reverse); for the fine steps (the
+   atoms that move on them, MovingGhosts); the coarse forces apart from
+   other fixes' (reverse, COPY)
 ------------------------------------------------------------------------- */
 
-int FixPEJumpAsync::pack_forward_comm(int n, int *list, double *buf, int /*pbc_flag*/,
-                                      int * /*pbc*/)
+int FixPEJumpAsync::pack_forward_comm(int n, int *list, double *buf, int pbc_flag, int *pbc)
 {
+  if (ghosts->active()) return ghosts->pack_forward(n, list, buf, pbc_flag, pbc);
   return assign->pack_forward(n, list, buf);
 }
 
@@ -637,13 +653,17 @@ int FixPEJumpAsync::pack_forward_comm(int n, int *list, double *buf, int /*pbc_f
 
 void FixPEJumpAsync::unpack_forward_comm(int n, int first, double *buf)
 {
-  assign->unpack_forward(n, first, buf);
+  if (ghosts->active())
+    ghosts->unpack_forward(n, first, buf);
+  else
+    assign->unpack_forward(n, first, buf);
 }
 
 /* ---------------------------------------------------------------------- */
 
 int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
 {
+  if (ghosts->active()) return ghosts->pack_reverse(n, first, buf);
   if (!reverse_copy) return assign->reversing() ? assign->pack_reverse(n, first, buf) : 0;
   double **copy = work->get(COPY);
   int m = 0;
@@ -656,6 +676,10 @@ int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
 
 void FixPEJumpAsync::unpack_reverse_comm(int n, int *list, double *buf)
 {
+  if (ghosts->active()) {
+    ghosts->unpack_reverse(n, list, buf);
+    return;
+  }
   if (!reverse_copy) {
     if (assign->reversing()) assign->unpack_reverse(n, list, buf);
     return;
@@ -856,7 +880,8 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
   move_moving(rule->node[rule->primary()] * h - into);
 
   // the evaluations clear and keep the forces of the atoms they act on only
-  const ForceSampler::Touched moving{0, &assign->moving_atoms};
+  // (and communicate those atoms' ghost copies only)
+  const ForceSampler::Touched moving{0, &assign->moving_atoms, ghosts->usable() ? ghosts : nullptr};
   split->activate(InteractionSplit::FINE);
   sampler->only_touch(&moving);
   sampler->compute(ForceSampler::ALL, 0, 0);
@@ -1355,11 +1380,7 @@ void FixPEJumpAsync::change_clocks()
   // are still where the last evaluation left them)
   if (due && (opts.buffer_layers > 0) && !by_subsets) comm->forward_comm();
   const bool changed = due && assign->follow(*split, to_fine, picked);
-  if (due || !split->up_to_date()) {
-    split->build();
-    assign->find_slow(*split);
-    assign->find_moving(*split);
-  }
+  if (due || !split->up_to_date()) sort_by_clock();
   if (!changed) return;
   // the forces at the node: with a Lobatto rule the start nodes of both
   // subsets are taken anew, and an atom's force is their sum (an

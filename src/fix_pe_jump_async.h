@@ -35,6 +35,7 @@ namespace PEJump {
   class ClockClasses;
   class ForceSampler;
   class InteractionSplit;
+  class MovingGhosts;
   class OtherFixes;
   class ParasiticDamping;
   class Quadrature;
@@ -87,7 +88,8 @@ class FixPEJumpAsync : public Fix {
 
   // the parts: the keywords, the quadrature rule, force evaluation, node
   // sampling, per-atom state, the scheme's updates, the stability guard,
-  // the damping of the parasitic mode, what other fixes do, the split of the interactions, where the clocks
+  // the damping of the parasitic mode, the fine steps' ghost
+  // communication, what other fixes do, the split of the interactions, where the clocks
   // are inside the coarse step, which atom is on which clock, and the
   // work arrays
   PEJump::Options opts;
@@ -98,6 +100,7 @@ class FixPEJumpAsync : public Fix {
   PEJump::TwoStep *scheme;
   PEJump::StabilityGuard *guard;
   PEJump::ParasiticDamping *damping;
+  PEJump::MovingGhosts *ghosts;
   PEJump::OtherFixes *others;
   PEJump::InteractionSplit *split;
   PEJump::AsyncClocks *clocks;
@@ -138,6 +141,7 @@ class FixPEJumpAsync : public Fix {
   void refuse_pair_misfit() const;    // at setup: the split's probes of the pair style
   void refuse_other_fixes() const;
   void check_clocks();
+  void sort_by_clock();    // after list builds and clock changes
   void start_scheme(const char *, bool);
   void change_clocks();    // a dynamic fast group or fast auto, at coarse nodes
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);

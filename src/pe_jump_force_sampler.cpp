@@ -26,6 +26,7 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "pe_jump_moving_ghosts.h"
 #include "timer.h"
 #include "utils.h"
 
@@ -142,7 +143,10 @@ void ForceSampler::set_hooks(const std::vector<Fix *> &prepare, const std::vecto
 void ForceSampler::compute(int mask, int eflag, int vflag)
 {
   timer->stamp(Timer::MODIFY);
-  comm->forward_comm();
+  if (touched && touched->ghosts)
+    touched->ghosts->forward();
+  else
+    comm->forward_comm();
   timer->stamp(Timer::COMM);
 
   clear_forces();
@@ -178,7 +182,10 @@ void ForceSampler::compute(int mask, int eflag, int vflag)
   reduce_threads();
 
   if (force->newton) {
-    comm->reverse_comm();
+    if (touched && touched->ghosts)
+      touched->ghosts->reverse();
+    else
+      comm->reverse_comm();
     timer->stamp(Timer::COMM);
   }
   project();

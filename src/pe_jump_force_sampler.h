@@ -23,6 +23,7 @@ namespace LAMMPS_NS {
 class Fix;
 
 namespace PEJump {
+  class MovingGhosts;
 
   // Evaluates selected force-field contributions at the current positions of
   // the owned atoms (ghosts are brought up to date first) with the sequence
@@ -96,9 +97,12 @@ namespace PEJump {
     // them: the first nfirst and those listed. While set, compute() clears
     // the forces of those (and of the ghosts) only, and NodeSampler::Keep
     // keeps those only (pe_jump/async: the atoms that move on fine steps)
+    // (ghosts: the ghost communication of such evaluations, if not all
+    // ghosts)
     struct Touched {
       int nfirst;
       const std::vector<int> *after;
+      MovingGhosts *ghosts;
     };
     void only_touch(const Touched *atoms) { touched = atoms; }
     const Touched *touches() const { return touched; }
