@@ -259,9 +259,11 @@ def wp_collect(configs, runs, errfun, counts=None):
             ev = r0["bench"]["steps"] * (cf["K"] * nb + npair) / (nb + npair)
         err = errfun(cf, r0)
         eH, eHt = energy_errors(r0, cf["integ"])
+        # steps: LAMMPS steps (respa: outer, async: coarse, K h each); fine_steps: steps of h
+        fine = r0["bench"]["steps"] * (cf["K"] if cf["integ"] in ("respa", "async") else 1)
         s.update(label=cf["label"], integ=cf["integ"], quad=cf.get("quad"), K=cf.get("K"),
                  h=cf["h"], evals=ev, err=err, eH=eH, eHt=eHt, steps=r0["bench"]["steps"],
-                 natoms=r0["natoms"])
+                 fine_steps=fine, natoms=r0["natoms"])
         pts.append(s)
     return pts
 
@@ -766,16 +768,18 @@ def stage_skip(ctx, tag="skip"):
         fr = sc["frac"]
         f = fr["fine"] / fr["all"]
         nodes, per = rule_evals(cf["quad"])
-        n = r0["steps"]
+        n = r0["steps"]                             # LAMMPS steps: async's are coarse steps (K h_F)
         outputs = len(r0["thermo_rows"]) - 1        # thermo at the end: energy tallied once
         if cf["integ"] == "async":
-            pred_step = per * (f + (1.0 - f) / cf["K"])
+            pred_step = per * (f * cf["K"] + (1.0 - f))   # per coarse step: K fine steps
             extra = outputs * 1.0                   # every rule: all interactions once more
+            fine = n * cf["K"]
         else:
             pred_step = per
             extra = outputs * (0.0 if cf["quad"].startswith("lobatto") else 1.0)
+            fine = n
         s.update(name=cf["name"], scene=cf["scene"], label=cf["label"], integ=cf["integ"], quad=cf["quad"],
-                 K=cf["K"], h=cf["h"], steps=n, natoms=r0["natoms"], evals=r0["bench"]["evals"],
+                 K=cf["K"], h=cf["h"], steps=n, fine_steps=fine, natoms=r0["natoms"], evals=r0["bench"]["evals"],
                  neighbors=r0.get("neighbors"), f_fine=f, pred_per_step=pred_step, outputs=outputs,
                  pred_evals=n * pred_step + extra, pred_extra=extra)
         atab.append(s)
@@ -899,8 +903,11 @@ def main():
         t0 = time.time()
         fn = {"retime": lambda c: stage_retime(c)}.get(st) or globals()["stage_" + st]
         fn(ctx)
+        # async_step: what one LAMMPS step of pe_jump/async is in the inputs of this driver
+        # (in.springs: timestep = K h, the coarse step); stages of older drivers have none (fine)
         meta["stages"][st] = {"seconds": round(time.time() - t0, 1), "finished": time.strftime("%Y-%m-%d %H:%M:%S"),
-                              "binary_mtime": meta["binary"]["mtime"], "git_head": meta.get("git_head", "")}
+                              "binary_mtime": meta["binary"]["mtime"], "git_head": meta.get("git_head", ""),
+                              "async_step": "coarse"}
         B.save_json(meta_path, meta)
         log(f"stage {st} done in {time.time() - t0:.0f} s")
     meta["total_seconds_last_invocation"] = round(time.time() - t00, 1)
