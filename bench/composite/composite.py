@@ -41,10 +41,10 @@ Methods (one MPI rank, one binary copied to bench/work/composite/bin/):
              and lobatto 3, fine step h_F = 0.01 and 0.005, K = 5, 10, 15,
              20, 50 (coarse step h_S = K h_F; K = 15 is not in the issue's
              list: the position error grows as h_S^2 and passes up to h_S ~
-             0.18). lobatto 2 is velocity Verlet on each clock: its primary
-             node is the end of the step, so energy output costs no extra
-             evaluation (midpoint evaluates everything once more at the end
-             of a step that prints thermo output)
+             0.18). lobatto 2 is velocity Verlet on each clock (its primary
+             node is the end of the step; like midpoint it still evaluates
+             every interaction once more at the end of a step that prints
+             thermo output: the same evaluation counts)
 A run that stops with a LAMMPS error (missing bond atoms, lost atoms, the
 stability guard of pe_jump/async) is unstable, and fails.
 
