@@ -142,7 +142,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   restart_global = 1;
   restart_peratom = 1;
   create_attribute = 1;
-  comm_forward = 1;
+  comm_forward = 3;    // (the positions of MovingGhosts; the clock flags need 1)
   comm_reverse = 3;
   force_reneighbor = 1;
   next_reneighbor = -1;
