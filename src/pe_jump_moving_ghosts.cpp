@@ -18,7 +18,6 @@
 #include "comm.h"
 #include "domain.h"
 #include "fix.h"
-#include "force.h"
 
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
