@@ -1005,9 +1005,7 @@ void FixPEJump::finish_check(const double *local)
 
 void FixPEJump::note_damping(bool from_now) const
 {
-  if (comm->me == 0)
-    damping->note(lmp, style, from_now ? update->ntimestep : -1,
-                  PEJump::ParasiticDamping::AUTO_STEPS);
+  if (comm->me == 0) damping->note(lmp, style, from_now ? update->ntimestep : -1);
 }
 
 /* ---------------------------------------------------------------------- */

@@ -253,7 +253,9 @@ void FixPEJumpAsync::post_neighbor()
 
 void FixPEJumpAsync::node_impulses()
 {
-  if (watch(OtherFixes::BETWEEN_STEPS) && scheme->any_changed(group_atoms()))
+  // (a pass over the atoms, made only while damp auto waits for a change)
+  if (damping->awaits_impulse() && watch(OtherFixes::BETWEEN_STEPS) &&
+      scheme->any_changed(group_atoms()))
     damping->impulse_here();
   if (END_IMPULSE < 0) return;
   double **v = atom->v;
@@ -999,9 +1001,7 @@ bool FixPEJumpAsync::finish_check(const double *local)
 
 void FixPEJumpAsync::note_damping(bool from_now) const
 {
-  if (comm->me == 0)
-    damping->note(lmp, style, from_now ? update->ntimestep : -1,
-                  PEJump::ParasiticDamping::AUTO_STEPS);
+  if (comm->me == 0) damping->note(lmp, style, from_now ? update->ntimestep : -1);
 }
 
 /* ----------------------------------------------------------------------

@@ -112,11 +112,11 @@ void ParasiticDamping::forget_history()
 
 /* ---------------------------------------------------------------------- */
 
-void ParasiticDamping::note(LAMMPS *lmp, const char *style, long from_step, double steps) const
+void ParasiticDamping::note(LAMMPS *lmp, const char *style, long from_step) const
 {
   const std::string when = (from_step < 0) ? std::string("in this run")
                                            : fmt::format("from step {}", from_step);
   utils::logmesg(
       lmp, "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat acts)\n",
-      style, steps, when);
+      style, AUTO_STEPS, when);
 }

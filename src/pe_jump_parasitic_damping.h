@@ -65,11 +65,14 @@ namespace PEJump {
     bool impulse_anywhere(bool seen);
     bool active() const { return on; }
     bool automatic_on() const { return automatic && on; }
+    // a velocity change beside a thermostat is still to be noted (damp auto
+    // starts damping there, and remembers it for the following runs)
+    bool awaits_impulse() const { return automatic && thermostatted && !ever_changed; }
     double beta(double h) const;
     // damp auto damps in this run (from_step < 0) or from that step on:
     // the log says so (the damping changes the trajectory at second order
     // in the time step; damp 0 turns it off)
-    void note(LAMMPS *, const char *style, long from_step, double steps) const;
+    void note(LAMMPS *, const char *style, long from_step) const;
 
     // the state fields: h <F> and P of the last step per atom (nullptr
     // before a run that may damp), valid if the clock's last step was
