@@ -54,6 +54,7 @@
 #include "pe_jump_other_fixes.h"
 #include "pe_jump_parasitic_damping.h"
 #include "pe_jump_quadrature.h"
+#include "pe_jump_split_tally.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_two_step.h"
 #include "pe_jump_work_forces.h"
@@ -91,9 +92,10 @@ static constexpr int FINE_CLOCK = 0, COARSE_CLOCK = 1;
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
     scheme(nullptr), guard(nullptr), damping(nullptr), ghosts(nullptr), others(nullptr),
-    split(nullptr), clocks(nullptr), assign(nullptr), classes(nullptr), work(nullptr),
-    changes_seen(0), fine_speed2(0.0), fine_change(0.0), reverse_copy(false), builds_inside(0),
-    lists_forced(false), end_time(0.0), impulse_at_start(false)
+    tally(nullptr), split(nullptr), clocks(nullptr), assign(nullptr), classes(nullptr),
+    work(nullptr), changes_seen(0), fine_speed2(0.0), fine_change(0.0), reverse_copy(false),
+    builds_inside(0), lists_forced(false), end_time(0.0), impulse_at_start(false),
+    impulse_pending(false)
 {
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
   opts.parse(lmp, style, narg, arg, 5, true);
@@ -113,6 +115,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   nodes = new NodeSampler(lmp, sampler);
   guard = new StabilityGuard(lmp);
   others = new OtherFixes(lmp, this);
+  tally = new PEJump::SplitTally(lmp);
   work = new PEJump::WorkForces(lmp, 2);
   state = new AtomState(lmp);
   scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
@@ -171,6 +174,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
   delete scheme;
   delete state;
   delete work;
+  delete tally;
   delete others;
   delete guard;
   delete nodes;
@@ -257,7 +261,9 @@ void FixPEJumpAsync::node_impulses()
   if (damping->awaits_impulse() && watch(OtherFixes::BETWEEN_STEPS) &&
       scheme->any_changed(group_atoms()))
     damping->impulse_here();
-  if (END_IMPULSE < 0) return;
+  // (a pass over the atoms only if an impulse waits: other fixes added
+  // forces at the last coarse node, or a restart file may carry one)
+  if ((END_IMPULSE < 0) || !impulse_pending) return;
   double **v = atom->v;
   double **pending = state->vec(END_IMPULSE);
   if (impulse_at_start) {
@@ -275,6 +281,7 @@ void FixPEJumpAsync::node_impulses()
       pending[i][k] = 0.0;
     }
   });
+  impulse_pending = false;
 }
 
 /* ----------------------------------------------------------------------
@@ -631,6 +638,7 @@ void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 {
   split->restore();
   nodes->note_step_flags(eflag, vflag);
+  if (tally->kept() && (eflag & ENERGY_GLOBAL)) tally->add();
   // the coarse interactions' forces, before other fixes add theirs
   if (!others->add_forces()) return;
   work->ensure(atom->nlocal + atom->nghost, needed_work() | (1 << COPY));
@@ -825,6 +833,10 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
   node_impulses();
   lists_forced = guard->rebuild_forced();
   begin_coarse_step();
+  // the step ends at the primary node (Lobatto rules): the fine and the
+  // coarse interactions are evaluated there, and their tallies give the
+  // energy output of the step without an evaluation of everything
+  tally->expect(primary_is_last_node() && nodes->energy_only_step());
   if (stale) build_lists_now();
   const double primary = rule->node[rule->primary()];
   fine_steps_until(primary * clocks->steps());
@@ -886,7 +898,9 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
   const ForceSampler::Touched moving{0, &assign->moving_atoms, ghosts->usable() ? ghosts : nullptr};
   split->activate(InteractionSplit::FINE);
   sampler->only_touch(&moving);
-  sampler->compute(ForceSampler::ALL, 0, 0);
+  const bool at_end = tally->expected() && (clocks->done() + 1 == clocks->steps());
+  sampler->compute(ForceSampler::ALL, at_end ? ENERGY_GLOBAL : 0, 0);
+  if (at_end) tally->keep();
   evals.step += node_cost();
   if (rule->size() > 1) fine_quadrature_sum();
   sampler->only_touch(nullptr);
@@ -1148,24 +1162,28 @@ void FixPEJumpAsync::final_integrate()
     refuse_velocity_changes();
   }
   evals.step += split->fraction(InteractionSplit::COARSE);
-  keep_coarse_primary(others->add_forces() ? coarse_forces_apart() : atom->f);
+  double **fprimary = others->add_forces() ? coarse_forces_apart() : atom->f;
+  const bool primary_last = primary_is_last_node();
+  if (!primary_last) keep_coarse_primary(fprimary);
   fine_steps_until(clocks->steps());
   hold_until(update->dt);
   coarse_quadrature_sum();
   double mag[2] = {0.0, 0.0};
-  slow_jumps(mag);
+  slow_jumps(mag, primary_last ? fprimary : nullptr);
   guard->set_slow_stats(mag[0], mag[1]);
-  if (END_IMPULSE >= 0) end_impulse_first_half();
+  if (impulse_pending) end_impulse_first_half();
   // lists that LAMMPS built in this step whatever the atoms did (neigh_modify
   // check no, a restart file written, a fix asking) are built again where a
   // run continued after this step builds them: every atom at the step end
   if (lists_forced && (neighbor->ago == 0)) build_lists_now();
-  if (nodes->step_end_evaluated()) lists_fit_step_end();
+  const bool tallied = tally->complete();
+  if (nodes->step_end_evaluated(tallied)) lists_fit_step_end();
 
   split->activate(InteractionSplit::ALL);
   // no other time integrator (refuse_other_fixes()): no atoms to leave out
-  const double at_end = nodes->at_step_end(others->step_observed(), 0);
+  const double at_end = nodes->at_step_end(others->step_observed(), 0, tallied);
   split->restore();
+  if (tallied) add_fine_forces_at_end();
   evals.step += at_end;
   evals.total += evals.step;
   scheme->forget_energies();
@@ -1175,6 +1193,22 @@ void FixPEJumpAsync::final_integrate()
   const bool ghosts_at_node = nodes->step_tallies() || others->step_observed();
   if (ghosts_at_node) classes->label(*split, *assign, groupbit);
   assign->evaluate_at_node(update->ntimestep, 1, ghosts_at_node);
+}
+
+/* ----------------------------------------------------------------------
+   the step's energy was tallied from the fine and the coarse evaluations
+   at its end (SplitTally): the forces there are those of all interactions
+   as after an evaluation of everything, for output that reads them (the
+   fine ones of a Lobatto rule's end node are kept as the next fine step's
+   start node)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::add_fine_forces_at_end()
+{
+  double **f = atom->f;
+  double **fstart = scheme->fstart();
+  for (const int i : assign->moving_atoms)
+    for (int k = 0; k < 3; k++) f[i][k] += fstart[i][k];
 }
 
 /* ----------------------------------------------------------------------
@@ -1229,6 +1263,7 @@ double **FixPEJumpAsync::coarse_forces_apart()
   double **f = atom->f;
   double **v = atom->v;
   double **pending = (END_IMPULSE >= 0) ? state->vec(END_IMPULSE) : nullptr;
+  impulse_pending = (pending != nullptr);
   const double kick = update->dt * force->ftm2v;
   group_atoms().each(atom->mask, nlocal, [&](int i) {
     const double scale = kick * scheme->inverse_mass_of(i);
@@ -1290,16 +1325,45 @@ void FixPEJumpAsync::coarse_quadrature_sum()
 }
 
 /* ----------------------------------------------------------------------
-   the slow atoms jump with the sums of their fine forces over the coarse
-   step and the coarse quadrature sum; mag: their largest |v|^2, |[v]|^2
+   true if nothing is evaluated between the primary coarse node and the
+   slow atoms' jumps (lobatto 2: the primary node is the step end, which
+   the fine steps reached before it, and there is no other coarse node to
+   sample): the jumps read the primary node's forces where they are
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::slow_jumps(double *mag)
+bool FixPEJumpAsync::primary_is_last_node() const
+{
+  const int first = rule->has_end_nodes() ? 1 : 0;
+  return (rule->node[rule->primary()] == 1.0) && (rule->size() - first <= 1);
+}
+
+/* ----------------------------------------------------------------------
+   the slow atoms jump with the sums of their fine forces over the coarse
+   step and the coarse quadrature sum (kept in FCOARSE, or with fprimary
+   the primary node's forces, see primary_is_last_node()); mag: their
+   largest |v|^2, |[v]|^2
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::slow_jumps(double *mag, double **fprimary)
+{
+  if (fprimary)
+    slow_jumps_as<true>(mag, fprimary);
+  else
+    slow_jumps_as<false>(mag, state->vec(FCOARSE));
+}
+
+/* ----------------------------------------------------------------------
+   PRIMARY: fcoarse holds the primary node's forces, which begin the sum
+   here as keep_coarse_primary() begins it (the same operations)
+------------------------------------------------------------------------- */
+
+template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double **fcoarse)
 {
   double **v = atom->v;
   double **jump = scheme->jump();
   double **facc = state->vec(FACC);
-  double **fcoarse = state->vec(FCOARSE);
+  double **fstart = (PRIMARY && rule->has_end_nodes()) ? state->vec(FSTART_COARSE) : nullptr;
+  const double wp = rule->weight[rule->primary()], w0 = rule->weight[0];
   const double coarse = update->dt;
   const double kick = 2.0 * coarse * force->ftm2v;
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
@@ -1315,7 +1379,15 @@ void FixPEJumpAsync::slow_jumps(double *mag)
   for (const int i : assign->slow_atoms) {
     double fslow[3], most[2] = {0.0, 0.0};
     for (int k = 0; k < 3; k++) {
-      fslow[k] = facc[i][k] * per_time + fcoarse[i][k];
+      double fc = fcoarse[i][k];
+      if (PRIMARY) {
+        fc = wp * fcoarse[i][k];
+        if (fstart) {
+          fc += w0 * fstart[i][k];
+          fstart[i][k] = fcoarse[i][k];
+        }
+      }
+      fslow[k] = facc[i][k] * per_time + fc;
       facc[i][k] = 0.0;
     }
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
@@ -1522,7 +1594,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
       double **f = atom->f;
       for (int i = 0; i < atom->nlocal; i++)
         for (int k = 0; k < 3; k++) pending[i][k] = -f[i][k];
-      impulse_at_start = true;
+      impulse_at_start = impulse_pending = true;
     }
   } else {
     kick_with(atom->f);
@@ -1629,6 +1701,8 @@ void FixPEJumpAsync::restart(char *buf)
   if (static_cast<int>(list[6]) != clocks->steps()) restarts("K differs from the restart file");
   assign->restore(&list[9], &list[4], (head & 4) ? &list[23] : nullptr);
   if (head & 8) assign->restored_from_dynamic();
+  // (the per-atom fields may hold the second half of an impulse)
+  impulse_pending = (END_IMPULSE >= 0);
   damping->set_kicked((head & DAMP_KICKED) != 0);
   if (head & DAMP_FIELDS) damping->allocate();
   damping->set_history(((head & DAMP_FINE) != 0) && scheme->started, FINE_CLOCK);

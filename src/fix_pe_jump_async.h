@@ -39,6 +39,7 @@ namespace PEJump {
   class OtherFixes;
   class ParasiticDamping;
   class Quadrature;
+  class SplitTally;
   class StabilityGuard;
   class TwoStep;
   class WorkForces;
@@ -102,6 +103,7 @@ class FixPEJumpAsync : public Fix {
   PEJump::ParasiticDamping *damping;
   PEJump::MovingGhosts *ghosts;
   PEJump::OtherFixes *others;
+  PEJump::SplitTally *tally;
   PEJump::InteractionSplit *split;
   PEJump::AsyncClocks *clocks;
   PEJump::ClockAssignment *assign;
@@ -125,6 +127,7 @@ class FixPEJumpAsync : public Fix {
   bool lists_forced;            // LAMMPS builds the lists in this step whatever the atoms do
   double end_time;              // update->atime of the coarse step's end
   bool impulse_at_start;        // END_IMPULSE holds -F(q^0) until the first step
+  bool impulse_pending;         // END_IMPULSE may hold an impulse (else it is 0)
 
   // SUM: fine quadrature sum, COPY: the coarse interactions' forces at the
   // primary coarse node (owned and ghost atoms) apart from those that
@@ -169,7 +172,10 @@ class FixPEJumpAsync : public Fix {
   double **coarse_forces_apart();
   void end_impulse_first_half();
   void coarse_quadrature_sum();
-  void slow_jumps(double *mag);
+  bool primary_is_last_node() const;
+  void add_fine_forces_at_end();
+  void slow_jumps(double *mag, double **fprimary);
+  template <bool PRIMARY> void slow_jumps_as(double *mag, double **fcoarse);
   bool finish_check(const double *local);
   std::string instability_advice() const;
   void slow_magnitudes();

@@ -245,9 +245,9 @@ double NodeSampler::memory_usage() const
 
 /* ---------------------------------------------------------------------- */
 
-double NodeSampler::at_step_end(bool observed, int groupbit)
+double NodeSampler::at_step_end(bool observed, int groupbit, bool tallied)
 {
-  if (step_tallies() || forces_dumped()) {
+  if (!tallied && (step_tallies() || forces_dumped())) {
     const int *mask = atom->mask;
     double **f = atom->f;
     std::vector<double> others;    // forces of the atoms outside the group
@@ -265,7 +265,7 @@ double NodeSampler::at_step_end(bool observed, int groupbit)
     ghosts_away = false;
     return 1.0;
   }
-  if (observed) comm->forward_comm();
+  if (observed || (tallied && ghosts_away)) comm->forward_comm();
   ghosts_away = false;
   return 0.0;
 }
@@ -324,6 +324,15 @@ void NodeSampler::ghosts_with_owned(bool observed)
 {
   if (ghosts_away && observed) comm->forward_comm();
   ghosts_away = false;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool NodeSampler::energy_only_step() const
+{
+  const bigint now = update->ntimestep;
+  return (update->eflag_global == now) && (update->eflag_atom != now) &&
+      (update->vflag_global != now) && (update->vflag_atom != now) && !forces_dumped();
 }
 
 /* ---------------------------------------------------------------------- */

@@ -148,11 +148,19 @@ namespace PEJump {
     // observed (returns 0). The owned atoms outside
     // the group of groupbit (0: none) keep the forces of the MD step,
     // which another time integrator of theirs applies after this fix
-    double at_step_end(bool observed, int groupbit);
+    // (tallied: the energy at the step end was tallied from the evaluations
+    // there, SplitTally: no evaluation, the ghosts are brought there)
+    double at_step_end(bool observed, int groupbit, bool tallied = false);
     bool tally_step() const;    // the step about to begin tallies energy or virial
+    // ... the global energy only (no per-atom tallies, no virial), and no
+    // dump may write forces
+    bool energy_only_step() const;
     // the step about to begin ends with an evaluation of everything
     // (at_step_end(): energy or virial tallied, or forces dumped)
-    bool step_end_evaluated() const { return tally_step() || forces_dumped(); }
+    bool step_end_evaluated(bool tallied = false) const
+    {
+      return !tallied && (tally_step() || forces_dumped());
+    }
     // the step ends at the primary node, evaluated by the MD step: if nodes
     // were evaluated since, the ghosts are still at the last of them; on
     // observed steps bring them to where the owned atoms are

@@ -405,6 +405,44 @@ TEST(PEJumpAsync, EvaluationCountsMatchThePaperAndTheWorkDone)
 }
 
 /* ----------------------------------------------------------------------
+   lobatto 2 ends its fine and coarse steps at the step end, where the last
+   fine step and the MD step evaluate the fine and the coarse interactions:
+   energy output adds their tallies up instead of evaluating everything
+   once more. Output that needs the virial (compute pressure) still takes
+   the evaluation of everything: the energies of both runs agree to
+   round-off, the trajectories exactly, and the energy-only run saves one
+   evaluation per output step
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, LobattoTwoTalliesTheStepEndEnergyFromItsEvaluations)
+{
+  constexpr int NSTEPS = 20, EVERY = 2;
+  std::vector<double> pe[2], x[2];
+  double evals[2];
+  for (int virial = 0; virial < 2; ++virial) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"region slab block 0 1 INF INF INF INF units lattice", "group fast region slab",
+            "fix 1 all pe_jump/async 5 fast quadrature lobatto 2", "timestep 0.025", "thermo 0",
+            "thermo_style custom step pe", fmt::format("fix pe all vector {} c_thermo_pe", EVERY)});
+    if (virial)
+      s.cmds({"compute p all pressure thermo_temp", fmt::format("fix p all vector {} c_p", EVERY)});
+    s.cmd(fmt::format("run {} post no", NSTEPS));
+    evals[virial] = s.vec("1", 4);
+    auto *kept = s.lmp->modify->get_fix_by_id("pe");
+    for (int n = 0; n < kept->size_vector; ++n) pe[virial].push_back(kept->compute_vector(n));
+    for (int id = 1; id <= s.lmp->atom->natoms; ++id)
+      for (int k = 0; k < 3; ++k) x[virial].push_back(s.x(id, k));
+  }
+  ASSERT_EQ(pe[0].size(), pe[1].size());
+  ASSERT_EQ(pe[0].size(), static_cast<size_t>(NSTEPS / EVERY + 1));
+  for (size_t n = 0; n < pe[0].size(); ++n)
+    EXPECT_NEAR(pe[0][n], pe[1][n], 1e-12 * std::fabs(pe[1][n])) << n;
+  EXPECT_EQ(x[0], x[1]);
+  EXPECT_NEAR(evals[1] - evals[0], NSTEPS / EVERY, 1e-9);
+}
+
+/* ----------------------------------------------------------------------
    split runs and restarts at any step (every step ends at a coarse node)
 ------------------------------------------------------------------------- */
 
