@@ -1309,8 +1309,8 @@ void FixPEJumpAsync::coarse_quadrature_sum()
   // where one of them would leave half the skin
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   if (xhold) {
-    const double local = guard->excursion(group_atoms(&assign->slow_atoms), free_flight(), xhold,
-                                          (rule->node[first] - 1.0) * coarse, 0.0);
+    double local = guard->excursion(group_atoms(&assign->slow_atoms), free_flight(), xhold,
+                                    (rule->node[first] - 1.0) * coarse, 0.0);
     double worst = 0.0;
     MPI_Allreduce(&local, &worst, 1, MPI_DOUBLE, MPI_MAX, world);
     const double half_skin = 0.5 * neighbor->skin;

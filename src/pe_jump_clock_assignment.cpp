@@ -373,15 +373,23 @@ bigint ClockAssignment::fast_off_clock() const
 namespace {
 template <typename In> void id_signature(const Atom *atom, MPI_Comm world, In in, double *sig)
 {
-  unsigned long long local[2] = {0, 0}, all[2];
+  unsigned long long count = 0, sum = 0;
   for (int i = 0; i < atom->nlocal; i++)
     if (in(i)) {
-      ++local[0];
-      local[1] += id_hash(atom->tag[i]);
+      ++count;
+      sum += id_hash(atom->tag[i]);
     }
-  MPI_Allreduce(local, all, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, world);
+  // (summed as the counts and the 32-bit halves of the sums, which a
+  // signed 64-bit sum holds for any number of ranks: LAMMPS' serial MPI
+  // stubs have no unsigned 64-bit type)
+  long long local[3] = {static_cast<long long>(count), static_cast<long long>(sum >> 32),
+                        static_cast<long long>(sum & 0xffffffffULL)};
+  long long all[3];
+  MPI_Allreduce(local, all, 3, MPI_LONG_LONG, MPI_SUM, world);
+  const unsigned long long total =
+      (static_cast<unsigned long long>(all[1]) << 32) + static_cast<unsigned long long>(all[2]);
   sig[0] = static_cast<double>(all[0]);
-  sig[1] = static_cast<double>(all[1] >> 11);    // 53 bits: exact in a double
+  sig[1] = static_cast<double>(total >> 11);    // 53 bits: exact in a double
 }
 }    // namespace
 

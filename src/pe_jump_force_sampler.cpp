@@ -35,10 +35,10 @@
 
 // with the OPENMP package, /omp styles leave the forces of the threads
 // unreduced unless they are the last /omp style of the Verlet order
-#if __has_include("fix_omp.h")
+// (LMP_OPENMP: LAMMPS' build defines it when the package is installed)
+#if defined(LMP_OPENMP)
 #include "fix_omp.h"
 #include "thr_data.h"
-#define PEJUMP_WITH_OPENMP
 #endif
 
 using namespace LAMMPS_NS;
@@ -130,10 +130,10 @@ void ForceSampler::set_hooks(const std::vector<Fix *> &prepare, const std::vecto
   omp = nullptr;
   for (auto *fix : preparations)
     if (utils::strmatch(fix->style, "^OMP$")) omp = fix;
-#ifndef PEJUMP_WITH_OPENMP
+#if !defined(LMP_OPENMP)
   if (omp && (comm->nthreads > 1))
     error->all(FLERR,
-               "Fix pe_jump was built without the OPENMP package headers and cannot reduce the "
+               "Fix pe_jump was built without the OPENMP package and cannot reduce the "
                "forces of several OpenMP threads: rebuild it with PKG_OPENMP or use 1 thread");
 #endif
 }
@@ -219,7 +219,7 @@ void ForceSampler::clear_forces()
 
 void ForceSampler::reduce_threads()
 {
-#ifdef PEJUMP_WITH_OPENMP
+#if defined(LMP_OPENMP)
   auto *fix = static_cast<FixOMP *>(omp);
   if (!fix || fix->get_reduced() || (fix->get_nthr() < 2)) return;
   double **f = atom->f;
