@@ -187,6 +187,15 @@ def main():
         line = line.split('#', 1)[0].strip()
         if line:
             listed.append(line)
+    linked = set()
+    for page in pages:
+        for m in re.finditer(r':doc:`([^`]*)`', read(page)):
+            target = re.search(r'<([^>]*)>\s*$', m.group(1))
+            linked.add((target.group(1) if target else m.group(1)).strip())
+    unused = sorted(set(listed) - linked)
+    if unused:
+        print('note: listed in doc/sphinx/lammps_pages.txt but linked from no page: '
+              + ', '.join(unused))
     if args.lammps_doc:
         if not os.path.isdir(args.lammps_doc):
             report('LAMMPS pages', [f'{args.lammps_doc} is not a folder'])
