@@ -9,7 +9,8 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends build-essential cmake ninja-build ccache \
   libopenmpi-dev openmpi-bin libgtest-dev googletest libyaml-dev python3 python3-numpy \
-  python3-matplotlib python3-scipy xz-utils ca-certificates dpkg-dev >/dev/null
+  python3-matplotlib python3-scipy xz-utils ca-certificates dpkg-dev \
+  python3-sphinx python3-sphinxcontrib.spelling hunspell-en-us >/dev/null
 export CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache}
 cmake -S . -B build -G Ninja -D CMAKE_BUILD_TYPE=Release
 cmake --build build -j "$(nproc)"
