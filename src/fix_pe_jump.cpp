@@ -56,6 +56,24 @@
 
 using namespace LAMMPS_NS;
 using namespace FixConst;
+
+// the global restart values, in this order: the state bits (HEAD_*), the
+// layout's format, the rule, the evaluations so far, the step history
+// (StepControl, 2 values), the census of the last run's end
+enum RestartValue { HEAD, FORMAT, FAMILY, POINTS, EVALS_TOTAL, STEPS, CENSUS = STEPS + 2 };
+static constexpr int NGLOBAL = CENSUS + PEJump::TwoStep::NCENSUS;
+static constexpr int RESTART_FORMAT = 20261206;
+// the scheme had started; damp auto damps since a velocity change; the
+// last step was damped (the damping's per-atom values are valid); they
+// follow the scheme's per-atom state
+static constexpr int HEAD_STARTED = 1, HEAD_KICKED = 4, HEAD_DAMPED = 8, HEAD_DAMP_FIELDS = 16;
+
+/* ---------------------------------------------------------------------- */
+
+template <typename Function> void FixPEJump::for_atoms(Function &&one) const
+{
+  group_atoms().each(atom->mask, atom->nlocal, one);
+}
 using PEJump::AtomSet;
 using PEJump::AtomState;
 using PEJump::ForceSampler;
@@ -72,29 +90,32 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
     state(nullptr), scheme(nullptr), steps(nullptr), damping(nullptr), guard(nullptr),
     others(nullptr), work(nullptr)
 {
+  opts = new PEJump::Options;
+  evals = new PEJump::Evaluations;
   if (narg < 3) utils::missing_cmd_args(FLERR, "fix pe_jump", error);
 
-  opts.parse(lmp, style, narg, arg, 3, false);
+  opts->parse(lmp, style, narg, arg, 3, false);
 
-  rule = new Quadrature(static_cast<Quadrature::Family>(opts.family), opts.npoints);
+  rule = new Quadrature(static_cast<Quadrature::Family>(opts->family), opts->npoints);
   sampler = new ForceSampler(lmp);
   nodes = new NodeSampler(lmp, sampler);
   guard = new StabilityGuard(lmp);
   others = new OtherFixes(lmp, this);
   work = new PEJump::WorkForces(lmp, 2);
 
-  if (opts.auto_tol > 0.0) {
-    if (opts.sample_mask != ForceSampler::ALL)
+  if (opts->auto_tol > 0.0) {
+    if (opts->sample_mask != ForceSampler::ALL)
       error->all(FLERR, "Fix {} quadrature auto samples all force contributions", style);
-    automatic = new PEJump::AutoQuadrature(lmp, id, opts.auto_tol);
+    automatic = new PEJump::AutoQuadrature(lmp, id, opts->auto_tol);
   }
 
   // the per-atom state; step control adds the force history it needs
   state = new AtomState(lmp);
   scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
-  const bool compensate = (opts.compensate < 0) ? (opts.adapt_eps > 0.0) : (opts.compensate != 0);
-  steps =
-      new StepControl(lmp, *state, opts.adapt_eps, opts.adapt_dtmin, opts.adapt_dtmax, compensate);
+  const bool compensate = (opts->compensate < 0) ? (opts->adapt_eps > 0.0)
+                                                 : (opts->compensate != 0);
+  steps = new StepControl(lmp, *state, opts->adapt_eps, opts->adapt_dtmin, opts->adapt_dtmax,
+                          compensate);
   damping = new PEJump::ParasiticDamping(*state);
 
   time_integrate = 1;
@@ -115,7 +136,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   reinit_pending = opened_ahead = before_open = born = 0;
   h_step = 0.0;
   end_time = 0.0;
-  evals = {};
+  *evals = {};
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
   scheme->fresh = born = 0;
@@ -143,6 +164,8 @@ FixPEJump::~FixPEJump()
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
+  delete evals;
+  delete opts;
   delete work;
   delete[] extlist;
   delete steps;
@@ -221,12 +244,12 @@ void FixPEJump::init()
   // over AUTO_STEPS steps, from the start if one adds forces, else from
   // the first step where a velocity changed). Lobatto 2 is velocity
   // Verlet, whose jumps [v]^n = h a^n have no such mode: auto leaves it be
-  damping->init(opts.damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
+  damping->init(opts->damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
                 others->thermostat_forces() > 0);
   maxexchange = state->values();    // (damping may have added its fields)
   check_others_for_rule();
   if (automatic) automatic->check_compute(style);
-  if (present && !(opts.sample_mask & present) && (comm->me == 0))
+  if (present && !(opts->sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
 
@@ -300,10 +323,10 @@ void FixPEJump::setup(int /*vflag*/)
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
                    !domain->box_change);
   opened_ahead = 0;
-  evals.step = 0.0;
+  evals->step = 0.0;
   // a new time step between runs: the jumps fit the old one (restart), unless
   // they are to be carried over (compensate given, or adapt)
-  scheme->agree_on_started(group_atoms(), style, (opts.compensate < 0) && !steps->adapts(),
+  scheme->agree_on_started(group_atoms(), style, (opts->compensate < 0) && !steps->adapts(),
                            nodes->tallied(true));
   nodes->ask_energy_at(update->laststep);    // for the next run to compare
   const int change = scheme->started ? scheme->velocity_change(group_atoms(), true) : 0;
@@ -325,7 +348,7 @@ void FixPEJump::setup(int /*vflag*/)
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (steps->adapts()) steps->start_run(style, pe + scheme->energies(group_atoms())[0]);
   if (damping->automatic_on() && !scheme->reading_snapshots()) note_damping(false);
-  if (automatic) automatic->start_run(*nodes, opts.sample_mask);
+  if (automatic) automatic->start_run(*nodes, opts->sample_mask);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -523,24 +546,12 @@ void FixPEJump::post_neighbor()
 
 /* ---------------------------------------------------------------------- */
 
-const int *FixPEJump::atom_mask() const
-{
-  return atom->mask;
-}
-
-/* ---------------------------------------------------------------------- */
-
-int FixPEJump::owned_atoms() const
-{
-  return atom->nlocal;
-}
-
 /* ---------------------------------------------------------------------- */
 
 bool FixPEJump::split_primary() const
 {
   const int present = sampler->present();
-  return others->add_forces() || ((opts.sample_mask & present) != present);
+  return others->add_forces() || ((opts->sample_mask & present) != present);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -548,7 +559,7 @@ bool FixPEJump::split_primary() const
 bool FixPEJump::use_copy() const
 {
   const int present = sampler->present();
-  return others->add_forces() && ((opts.sample_mask & present) == present);
+  return others->add_forces() && ((opts->sample_mask & present) == present);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -593,7 +604,7 @@ void FixPEJump::pre_reverse(int eflag, int vflag)
 void FixPEJump::final_integrate()
 {
   grow_work();
-  evals.step = 1.0;
+  evals->step = 1.0;
 
   // a velocity changed by another fix during the step (wall/reflect, ...)
   // changed the free-flight velocity, which atom->v holds: an impulse
@@ -632,7 +643,7 @@ void FixPEJump::final_integrate()
     nodes->ghosts_with_owned(others->step_observed());
   if (others->integrate_others() && (neighbor->ago == 0) && !rule->only_end_nodes())
     others->refuse_interactions(rule->name().c_str());
-  evals.total += evals.step;
+  evals->total += evals->step;
   scheme->forget_energies();
   steps->step_done(h_step);
 }
@@ -723,7 +734,7 @@ bool FixPEJump::may_open_ahead() const
 
 void FixPEJump::tally_at_node()
 {
-  evals.step +=
+  evals->step +=
       nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
 }
 
@@ -769,7 +780,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
     primary_sampled_force();
 
   // the jump takes the forces that the rule integrates
-  const double kick = (opts.init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
+  const double kick = (opts->init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
   scheme->start(group_atoms(), split_primary() ? fsample() : atom->f, kick, [&](int) {
     return update->dt;
   });
@@ -777,7 +788,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   // fixes defined after this one act on the forces after its setup(): redo
   // the initial kick with the complete forces at the first step
 
-  reinit_pending = with_start && (opts.init_style == PEJump::Options::KICK) && !split_primary() &&
+  reinit_pending = with_start && (opts->init_style == PEJump::Options::KICK) && !split_primary() &&
       sampler->has_projections();
   scheme->started = 1;
   steps->forget();
@@ -814,9 +825,9 @@ void FixPEJump::primary_sampled_force()
     if (force->newton) comm->reverse_comm(this);
   } else {
     NodeSampler::Keep keep(*nodes);
-    sampler->compute(opts.sample_mask, 0, 0);
+    sampler->compute(opts->sample_mask, 0, 0);
     if (nlocal) memcpy(&fsample()[0][0], &atom->f[0][0], nbytes);
-    evals.step += sampler->fraction(opts.sample_mask);
+    evals->step += sampler->fraction(opts->sample_mask);
   }
   // at setup, fixes after this one have not yet acted on the forces
   if (sampler->has_projections() && (split_primary() || update->setupflag)) project_sampled();
@@ -855,7 +866,7 @@ void FixPEJump::refresh_start_nodes()
     if (std::isnan(fstart[i][0])) fresh.push_back(i);
   });
   store_start_node();
-  if (opts.init_style != PEJump::Options::KICK) return;
+  if (opts->init_style != PEJump::Options::KICK) return;
   double **jump = scheme->jump();
   for (const int i : fresh) {
     const double dtfm = force->ftm2v * update->dt * scheme->inverse_mass_of(i);
@@ -909,8 +920,8 @@ void FixPEJump::quadrature_sum()
   const bool keep_forces = split_primary() || !reuse_start;
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
-                       group_atoms(), opts.sample_mask, fsum(), nullptr, keep_forces);
-  evals.step += evaluated * sampler->fraction(opts.sample_mask);
+                       group_atoms(), opts->sample_mask, fsum(), nullptr, keep_forces);
+  evals->step += evaluated * sampler->fraction(opts->sample_mask);
   if (!keep_forces && atom->nlocal && (others->step_observed() || nodes->tally_step()))
     memcpy(&atom->f[0][0], &fstart[0][0], 3 * sizeof(double) * atom->nlocal);
 }
@@ -929,9 +940,9 @@ void FixPEJump::auto_quadrature_sum()
     if (std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
   });
-  const int evaluated = automatic->sum(*nodes, opts.sample_mask, group_atoms(), free_flight(),
+  const int evaluated = automatic->sum(*nodes, opts->sample_mask, group_atoms(), free_flight(),
                                        h_step, fstart, fsample(), fsum());
-  evals.step += evaluated * sampler->fraction(opts.sample_mask);
+  evals->step += evaluated * sampler->fraction(opts->sample_mask);
   // the end node is the start node of the next step
   for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
@@ -1101,11 +1112,25 @@ double FixPEJump::compute_vector(int n)
     case 2:
       return update->dt;
     case 3:
-      return evals.step;
+      return evals->step;
     case 4:
-      return evals.total;
+      return evals->total;
   }
   return 0.0;
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **FixPEJump::fsum() const
+{
+  return work->get(SUM);
+}
+
+/* ---------------------------------------------------------------------- */
+
+double **FixPEJump::fsample() const
+{
+  return work->get(SAMPLE);
 }
 
 /* ----------------------------------------------------------------------
@@ -1213,16 +1238,14 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  // + 2: the census follows; + 4: damp auto damps since a velocity change;
-  // + 8: the last step was damped (the damping's per-atom values are
-  // valid); + 16: they follow the scheme's per-atom state
-  list[0] = ((scheme->started > 0) ? 1 : 0) + 2 + (damping->kicked() ? 4 : 0) +
-      (damping->has_history() ? 8 : 0) + (damping->allocated() ? 16 : 0);
-  list[1] = rule->family();
-  list[2] = rule->points();
-  list[3] = evals.total;
-  steps->save(&list[4]);
-  scheme->save_census(&list[6]);
+  list[HEAD] = (scheme->started > 0 ? HEAD_STARTED : 0) + (damping->kicked() ? HEAD_KICKED : 0) +
+      (damping->has_history() ? HEAD_DAMPED : 0) + (damping->allocated() ? HEAD_DAMP_FIELDS : 0);
+  list[FORMAT] = RESTART_FORMAT;
+  list[FAMILY] = rule->family();
+  list[POINTS] = rule->points();
+  list[EVALS_TOTAL] = evals->total;
+  steps->save(&list[STEPS]);
+  scheme->save_census(&list[CENSUS]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1230,16 +1253,18 @@ void FixPEJump::global_state(double *list) const
 void FixPEJump::restart(char *buf)
 {
   auto *list = reinterpret_cast<double *>(buf);
-  const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
-      (static_cast<int>(list[2]) == rule->points());
-  const int head = static_cast<int>(list[0]);
-  scheme->started = ((head & 1) != 0) && same_rule;
-  evals.total = list[3];
-  steps->load(&list[4]);
-  if (head >= 2) scheme->load_census(&list[6]);
-  damping->set_kicked((head & 4) != 0);
-  if (head & 16) damping->allocate();
-  damping->set_history(((head & 8) != 0) && scheme->started);
+  if (static_cast<int>(list[FORMAT]) != RESTART_FORMAT)
+    error->all(FLERR, "Fix {}: the restart file has another layout of the fix's state", style);
+  const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
+      (static_cast<int>(list[POINTS]) == rule->points());
+  const int head = static_cast<int>(list[HEAD]);
+  scheme->started = ((head & HEAD_STARTED) != 0) && same_rule;
+  evals->total = list[EVALS_TOTAL];
+  steps->load(&list[STEPS]);
+  scheme->load_census(&list[CENSUS]);
+  damping->set_kicked((head & HEAD_KICKED) != 0);
+  if (head & HEAD_DAMP_FIELDS) damping->allocate();
+  damping->set_history(((head & HEAD_DAMPED) != 0) && scheme->started);
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "

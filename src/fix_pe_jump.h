@@ -21,24 +21,27 @@ FixStyle(pe_jump,FixPEJump);
 #define LMP_FIX_PE_JUMP_H
 
 #include "fix.h"
-#include "pe_jump_node_sampler.h"
-#include "pe_jump_options.h"
-#include "pe_jump_work_forces.h"
 
 #include <string>
 #include <vector>
 
 namespace LAMMPS_NS {
 namespace PEJump {
+  struct AtomSet;
   class AtomState;
-  class ForceSampler;
   class AutoQuadrature;
+  struct Evaluations;
+  class ForceSampler;
+  struct FreeFlight;
+  class NodeSampler;
+  struct Options;
   class OtherFixes;
   class ParasiticDamping;
   class Quadrature;
   class StabilityGuard;
   class StepControl;
   class TwoStep;
+  class WorkForces;
 }    // namespace PEJump
 
 class FixPEJump : public Fix {
@@ -78,13 +81,13 @@ class FixPEJump : public Fix {
   double memory_usage() override;
 
  private:
-  using AtomList = PEJump::AtomList;
+  using AtomList = std::vector<int>;
 
   // the parts: the keywords, quadrature rule (or the nested rules of
   // quadrature auto), force evaluation, node sampling, per-atom state, the
   // scheme's updates, step control and damping, the stability guard, what
   // other fixes do, and the work arrays
-  PEJump::Options opts;
+  PEJump::Options *opts;
   PEJump::Quadrature *rule;
   PEJump::AutoQuadrature *automatic;    // quadrature auto, or nullptr
   PEJump::ForceSampler *sampler;
@@ -97,19 +100,18 @@ class FixPEJump : public Fix {
   PEJump::OtherFixes *others;
   PEJump::WorkForces *work;    // SUM: the quadrature sum, SAMPLE: the sampled primary force
 
-  int reinit_pending;           // redo the initial kick when all fix forces are in
-  int opened_ahead;             // the last step began this one already
-  int before_open;              // atom->v holds v^n while this step's nodes are checked
-  int born;                     // atoms created in this step await their start (this rank)
-  double advance_pending;       // free flight left for after this step's list build
-  double h_step;                // step size used in the current step
-  double end_time;              // update->atime of the step; the node's during it
-  PEJump::Evaluations evals;    // force evaluations
+  int reinit_pending;            // redo the initial kick when all fix forces are in
+  int opened_ahead;              // the last step began this one already
+  int before_open;               // atom->v holds v^n while this step's nodes are checked
+  int born;                      // atoms created in this step await their start (this rank)
+  double advance_pending;        // free flight left for after this step's list build
+  double h_step;                 // step size used in the current step
+  double end_time;               // update->atime of the step; the node's during it
+  PEJump::Evaluations *evals;    // force evaluations
 
   enum { SUM, SAMPLE };
-  // (inline: the loops take them per atom)
-  double **fsum() const { return work->get(SUM); }
-  double **fsample() const { return work->get(SAMPLE); }
+  double **fsum() const;
+  double **fsample() const;
   void grow_work();
 
   PEJump::AtomSet group_atoms() const;
@@ -150,22 +152,13 @@ class FixPEJump : public Fix {
   void global_state(double *) const;
 
   // apply one(i) to the owned atoms of the group
-  template <typename Function> void for_atoms(Function &&one) const
-  {
-    group_atoms().each(atom_mask(), owned_atoms(), one);
-  }
-  const int *atom_mask() const;    // atom->mask, atom->nlocal (the header
-  int owned_atoms() const;         // needs no definition of class Atom)
+  template <typename Function> void for_atoms(Function &&one) const;
 
   // the atoms of the group jump with the quadrature sums favg of their
   // forces over the step and move on by rest from the primary node to
   // q^{n+1}; mag: the largest |v^{n+3/2}|^2 and |[v]^{n+1}|^2 so far
   void finish_step(double **favg, double rest, double *mag);
   bool may_open_ahead() const;
-  // values of the global restart state: 6, then the census of the last
-  // run's end (TwoStep::NCENSUS), told by the first value (2 or 3; files
-  // of earlier versions: 0 or 1, without it)
-  static constexpr int NGLOBAL = 17;
 };
 
 }    // namespace LAMMPS_NS

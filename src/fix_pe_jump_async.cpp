@@ -51,6 +51,7 @@
 #include "pe_jump_interaction_split.h"
 #include "pe_jump_moving_ghosts.h"
 #include "pe_jump_node_sampler.h"
+#include "pe_jump_options.h"
 #include "pe_jump_other_fixes.h"
 #include "pe_jump_parasitic_damping.h"
 #include "pe_jump_quadrature.h"
@@ -78,11 +79,29 @@ using PEJump::StabilityGuard;
 
 // nodes closer than this (in fine steps) are the same
 static constexpr double SAME_NODE = 1.0e-9;
-// restart head bit: written with timestep = the coarse step
-static constexpr int COARSE_TIMESTEP = 16;
-// restart head bits of the parasitic damping: damp auto damps since a
-// velocity change, its per-atom fields follow the scheme's, and the last
-// fine and coarse steps were damped (the fields are valid)
+// the global restart values, in this order: the state bits (HEAD_*,
+// DAMP_*), the layout's format, the rule, the evaluations so far, K, what
+// the clock assignment keeps (the fast group seen, 2 values; the clocks, 3;
+// the buffer's reach), the census of the last run's end
+enum RestartValue {
+  HEAD,
+  FORMAT,
+  FAMILY,
+  POINTS,
+  EVALS_TOTAL,
+  NFINE,
+  FAST_SEEN,
+  CLOCKS = FAST_SEEN + 2,
+  BUFFER_REACH = CLOCKS + 3,
+  CENSUS
+};
+static constexpr int NGLOBAL = CENSUS + PEJump::TwoStep::NCENSUS;
+static constexpr int RESTART_FORMAT = 20261206;
+// the scheme had started; the fast group is dynamic
+static constexpr int HEAD_STARTED = 1, HEAD_DYNAMIC = 8;
+// the parasitic damping: damp auto damps since a velocity change, its
+// per-atom fields follow the scheme's, and the last fine and coarse steps
+// were damped (the fields are valid)
 static constexpr int DAMP_KICKED = 32, DAMP_FIELDS = 64, DAMP_FINE = 128, DAMP_COARSE = 256;
 // the clocks of the parasitic damping's history
 static constexpr int FINE_CLOCK = 0, COARSE_CLOCK = 1;
@@ -97,8 +116,10 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     builds_inside(0), lists_forced(false), end_time(0.0), impulse_at_start(false),
     impulse_pending(false)
 {
+  opts = new PEJump::Options;
+  evals = new PEJump::Evaluations;
   if (narg < 5) utils::missing_cmd_args(FLERR, "fix pe_jump/async", error);
-  opts.parse(lmp, style, narg, arg, 5, true);
+  opts->parse(lmp, style, narg, arg, 5, true);
   const int nfine = utils::inumeric(FLERR, arg[3], false, lmp);
   if (nfine < 1) error->all(FLERR, "Fix pe_jump/async needs K >= 1 fine steps per coarse step");
   if (group->dynamic[igroup])
@@ -110,7 +131,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
   refuse_keywords();
 
-  rule = new Quadrature(static_cast<Quadrature::Family>(opts.family), opts.npoints);
+  rule = new Quadrature(static_cast<Quadrature::Family>(opts->family), opts->npoints);
   sampler = new ForceSampler(lmp);
   nodes = new NodeSampler(lmp, sampler);
   guard = new StabilityGuard(lmp);
@@ -125,8 +146,8 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   FCOARSE = state->add("fcoarse", 3, 0.0);
   damping = new PEJump::ParasiticDamping(*state);
   ghosts = new PEJump::MovingGhosts(lmp, this);
-  assign = new ClockAssignment(lmp, this, arg[4], {opts.buffer_layers, opts.buffer_reach},
-                               opts.fast_auto > 0.0);
+  assign = new ClockAssignment(lmp, this, arg[4], {opts->buffer_layers, opts->buffer_reach},
+                               opts->fast_auto > 0.0);
   classes = new PEJump::ClockClasses(lmp, *state);
   clocks = new AsyncClocks(nfine);
   split = new InteractionSplit(lmp, groupbit, assign->clock_bit());
@@ -164,6 +185,8 @@ FixPEJumpAsync::~FixPEJumpAsync()
     atom->delete_callback(id, Atom::RESTART);
   }
   if (assign) assign->delete_clock_group();
+  delete evals;
+  delete opts;
   delete[] extlist;
   delete split;
   delete clocks;
@@ -213,7 +236,7 @@ void FixPEJumpAsync::init()
   split->set_fine_bit(assign->clock_bit());
   // thermostats drive the parasitic mode on both clocks (see fix pe_jump;
   // auto: over AUTO_STEPS coarse steps)
-  damping->init(opts.damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
+  damping->init(opts->damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
                 others->thermostat_forces() > 0);
   maxexchange = state->values();
 }
@@ -297,7 +320,7 @@ PEJump::FreeFlight FixPEJumpAsync::free_flight() const
 
 void FixPEJumpAsync::setup(int /*vflag*/)
 {
-  scheme->agree_on_started(group_atoms(), style, opts.compensate < 0, nodes->tallied(true));
+  scheme->agree_on_started(group_atoms(), style, opts->compensate < 0, nodes->tallied(true));
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
@@ -314,7 +337,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   grow_work();
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
                    !domain->box_change);
-  evals.step = 0.0;
+  evals->step = 0.0;
   if (!scheme->started)
     start_scheme(nullptr, true);
   else
@@ -364,15 +387,15 @@ void FixPEJumpAsync::continue_scheme()
 
 void FixPEJumpAsync::refuse_keywords() const
 {
-  if (opts.adapt_eps > 0.0)
+  if (opts->adapt_eps > 0.0)
     error->all(FLERR,
                "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
                "steps are fixed (use fix pe_jump for adaptive steps)");
-  if (opts.auto_tol > 0.0)
+  if (opts->auto_tol > 0.0)
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
-  if (opts.compensate > 0)
+  if (opts->compensate > 0)
     error->all(FLERR, "Fix pe_jump/async does not support compensate yes: its steps are fixed");
-  if (opts.sample_mask != ForceSampler::ALL)
+  if (opts->sample_mask != ForceSampler::ALL)
     error->all(FLERR,
                "Fix pe_jump/async samples all force contributions: remove the sample keyword");
 }
@@ -857,7 +880,7 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 void FixPEJumpAsync::begin_coarse_step()
 {
   clocks->begin(update->dt);
-  evals.step = 0.0;
+  evals->step = 0.0;
   fine_speed2 = fine_change = 0.0;
   grow_work();
   scheme->open(group_atoms(), watch(OtherFixes::INSIDE_STEP));
@@ -901,7 +924,7 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
   const bool at_end = tally->expected() && (clocks->done() + 1 == clocks->steps());
   sampler->compute(ForceSampler::ALL, at_end ? ENERGY_GLOBAL : 0, 0);
   if (at_end) tally->keep();
-  evals.step += node_cost();
+  evals->step += node_cost();
   if (rule->size() > 1) fine_quadrature_sum();
   sampler->only_touch(nullptr);
   split->restore();
@@ -1113,8 +1136,8 @@ void FixPEJumpAsync::fine_quadrature_sum()
   const double h = clocks->fine_step();
   const int evaluated =
       nodes->sum_nodes(*rule, first, p, h, -rule->node[p] * h, free_flight(), group_atoms(&moving),
-                       opts.sample_mask, fsum, nullptr, false);
-  evals.step += evaluated * node_cost();
+                       opts->sample_mask, fsum, nullptr, false);
+  evals->step += evaluated * node_cost();
 }
 
 /* ----------------------------------------------------------------------
@@ -1161,7 +1184,7 @@ void FixPEJumpAsync::final_integrate()
     if (scheme->any_changed(group_atoms())) changes_seen = 1;
     refuse_velocity_changes();
   }
-  evals.step += split->fraction(InteractionSplit::COARSE);
+  evals->step += split->fraction(InteractionSplit::COARSE);
   double **fprimary = others->add_forces() ? coarse_forces_apart() : atom->f;
   const bool primary_last = primary_is_last_node();
   if (!primary_last) keep_coarse_primary(fprimary);
@@ -1184,8 +1207,8 @@ void FixPEJumpAsync::final_integrate()
   const double at_end = nodes->at_step_end(others->step_observed(), 0, tallied);
   split->restore();
   if (tallied) add_fine_forces_at_end();
-  evals.step += at_end;
-  evals.total += evals.step;
+  evals->step += at_end;
+  evals->total += evals->step;
   scheme->forget_energies();
 
   // the labels are output only: take them where something looks, when
@@ -1319,8 +1342,8 @@ void FixPEJumpAsync::coarse_quadrature_sum()
   split->activate(InteractionSplit::COARSE);
   const int evaluated = nodes->sum_nodes(*rule, first, rule->primary(), coarse, -coarse,
                                          free_flight(), group_atoms(&assign->slow_atoms),
-                                         opts.sample_mask, state->vec(FCOARSE), nullptr, false);
-  evals.step += evaluated * node_cost();
+                                         opts->sample_mask, state->vec(FCOARSE), nullptr, false);
+  evals->step += evaluated * node_cost();
   split->restore();
 }
 
@@ -1434,7 +1457,7 @@ void FixPEJumpAsync::slow_magnitudes()
 void FixPEJumpAsync::change_clocks()
 {
   std::vector<int> to_fine, chosen;
-  if (opts.fast_auto > 0.0) choose_fast(chosen);
+  if (opts->fast_auto > 0.0) choose_fast(chosen);
   const std::vector<int> *picked = chosen.empty() ? nullptr : &chosen;
   // (initial_integrate() of the step after the node)
   const bool due = assign->due(picked, update->ntimestep - 1, 1);
@@ -1445,12 +1468,12 @@ void FixPEJumpAsync::change_clocks()
       (split->fraction(InteractionSplit::FINE) < 0.5);
   if (by_subsets) {
     grow_work();
-    evals.total += fine_forces_at_node(work->get(SUM), nullptr);
+    evals->total += fine_forces_at_node(work->get(SUM), nullptr);
   }
   // the buffer layers are the partners within the cutoff at the node: the
   // ghost atoms must be there too (without energy output at the node they
   // are still where the last evaluation left them)
-  if (due && (opts.buffer_layers > 0) && !by_subsets) comm->forward_comm();
+  if (due && (opts->buffer_layers > 0) && !by_subsets) comm->forward_comm();
   const bool changed = due && assign->follow(*split, to_fine, picked);
   if (due || !split->up_to_date()) sort_by_clock();
   if (!changed) return;
@@ -1467,15 +1490,15 @@ void FixPEJumpAsync::change_clocks()
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) total[i][k] = fstart[i][k] + fstart_coarse[i][k];
     restart_jumps(to_fine, total);
-    evals.total += 1.0;
+    evals->total += 1.0;
   } else if (by_subsets) {
-    evals.total += fine_forces_at_node(work->get(SUM), &to_fine);
+    evals->total += fine_forces_at_node(work->get(SUM), &to_fine);
     restart_jumps(to_fine, work->get(SUM));
   } else {
     NodeSampler::Keep keep(*nodes);
     sampler->compute(ForceSampler::ALL, 0, 0);
     restart_jumps(to_fine, atom->f);
-    evals.total += 1.0;
+    evals->total += 1.0;
   }
   guard->forget_stats();
   slow_magnitudes();
@@ -1499,7 +1522,7 @@ void FixPEJumpAsync::choose_fast(std::vector<int> &chosen) const
   double **v = atom->v;
   double **jump = scheme->jump();
   const double coarse = update->dt;
-  const double limit = opts.fast_auto * neighbor->skin;
+  const double limit = opts->fast_auto * neighbor->skin;
   chosen.assign(nlocal, 0);
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
@@ -1570,7 +1593,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
   grow_work();
   if (with_start && rule->has_end_nodes()) store_start_node();
-  const double kick = (opts.init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
+  const double kick = (opts->init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
   const double coarse = update->dt, fine = coarse / clocks->steps();
   const auto kick_with = [&](double **f) {
     scheme->start(group_atoms(), f, kick, [&](int i) {
@@ -1583,7 +1606,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   if (others->add_forces() || sampler->has_projections()) {
     NodeSampler::Keep keep(*nodes);
     sampler->compute(ForceSampler::ALL, 0, 0);
-    evals.total += 1.0;
+    evals->total += 1.0;
     kick_with(atom->f);
     // Lobatto rules: the first coarse step begins with half the impulse of
     // the other fixes' forces at q^0, which all of them have added only
@@ -1613,9 +1636,9 @@ std::string FixPEJumpAsync::instability_advice() const
       "or their coupling at the interface, which has resonances (see the stability section of "
       "the fix pe_jump/async documentation), is unstable: reduce the time step or change K{}",
       update->dt / clocks->steps(), update->dt,
-      opts.buffer_layers ? ""
-                         : ", or add the keyword buffer 1 (the slow partners of the interface "
-                           "then take the fine step)");
+      opts->buffer_layers ? ""
+                          : ", or add the keyword buffer 1 (the slow partners of the interface "
+                            "then take the fine step)");
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1629,9 +1652,9 @@ double FixPEJumpAsync::compute_vector(int n)
     case 2:
       return update->dt;
     case 3:
-      return evals.step;
+      return evals->step;
     case 4:
-      return evals.total;
+      return evals->total;
     case 5:
       return 1.0;    // every MD step ends at a coarse node
     case 6:
@@ -1650,20 +1673,19 @@ double FixPEJumpAsync::compute_vector(int n)
 
 void FixPEJumpAsync::write_restart(FILE *fp)
 {
-  // (+ 2: the census follows, + 4: and the buffer's reach, + 8: the fast
-  // group is dynamic, + 16: the time step is the coarse step)
-  const int damp = (damping->kicked() ? DAMP_KICKED : 0) +
+  double list[NGLOBAL] = {};
+  list[HEAD] = (scheme->started > 0 ? HEAD_STARTED : 0) +
+      (assign->dynamic_group() ? HEAD_DYNAMIC : 0) + (damping->kicked() ? DAMP_KICKED : 0) +
       (damping->allocated() ? DAMP_FIELDS : 0) +
       (damping->has_history(FINE_CLOCK) ? DAMP_FINE : 0) +
       (damping->has_history(COARSE_CLOCK) ? DAMP_COARSE : 0);
-  double list[NGLOBAL] = {((scheme->started > 0) ? 1.0 : 0.0) + 2.0 + 4.0 +
-                              (assign->dynamic_group() ? 8.0 : 0.0) + COARSE_TIMESTEP + damp,
-                          static_cast<double>(rule->family()), static_cast<double>(rule->points()),
-                          evals.total};
-  assign->save(&list[9], &list[4], &list[23]);
-  list[6] = clocks->steps();
-  list[7] = 0.0;
-  scheme->save_census(&list[12]);
+  list[FORMAT] = RESTART_FORMAT;
+  list[FAMILY] = rule->family();
+  list[POINTS] = rule->points();
+  list[EVALS_TOTAL] = evals->total;
+  list[NFINE] = clocks->steps();
+  assign->save(&list[CLOCKS], &list[FAST_SEEN], &list[BUFFER_REACH]);
+  scheme->save_census(&list[CENSUS]);
   if (comm->me == 0) {
     int size = sizeof(list);
     fwrite(&size, sizeof(int), 1, fp);
@@ -1676,12 +1698,14 @@ void FixPEJumpAsync::write_restart(FILE *fp)
 void FixPEJumpAsync::restart(char *buf)
 {
   auto *list = reinterpret_cast<double *>(buf);
-  const bool same_rule = (static_cast<int>(list[1]) == rule->family()) &&
-      (static_cast<int>(list[2]) == rule->points());
-  const int head = static_cast<int>(list[0]);
-  scheme->started = (head & 1) != 0;
-  evals.total = list[3];
-  if (head & 2) scheme->load_census(&list[12]);
+  if (static_cast<int>(list[FORMAT]) != RESTART_FORMAT)
+    error->all(FLERR, "Fix {}: the restart file has another layout of the fix's state", style);
+  const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
+      (static_cast<int>(list[POINTS]) == rule->points());
+  const int head = static_cast<int>(list[HEAD]);
+  scheme->started = (head & HEAD_STARTED) != 0;
+  evals->total = list[EVALS_TOTAL];
+  scheme->load_census(&list[CENSUS]);
   const auto restarts = [&](const std::string &why) {
     if (scheme->started && (comm->me == 0))
       utils::logmesg(lmp, "Fix {}: {}: the two-step scheme restarts from the current state\n",
@@ -1689,18 +1713,9 @@ void FixPEJumpAsync::restart(char *buf)
     scheme->started = 0;
   };
   if (!same_rule) restarts("quadrature differs from the restart file");
-  if (!(head & COARSE_TIMESTEP)) {
-    // inside a coarse step its slow atoms' state cannot be continued
-    if (static_cast<int>(list[7]) != 0)
-      error->all(FLERR,
-                 "Fix pe_jump/async: the restart file was written inside a coarse step by a "
-                 "version in which the time step was the fine step: it cannot be continued");
-    restarts("the restart file was written by a version in which the time step was the fine "
-             "step; it is now the coarse step");
-  }
-  if (static_cast<int>(list[6]) != clocks->steps()) restarts("K differs from the restart file");
-  assign->restore(&list[9], &list[4], (head & 4) ? &list[23] : nullptr);
-  if (head & 8) assign->restored_from_dynamic();
+  if (static_cast<int>(list[NFINE]) != clocks->steps()) restarts("K differs from the restart file");
+  assign->restore(&list[CLOCKS], &list[FAST_SEEN], &list[BUFFER_REACH]);
+  if (head & HEAD_DYNAMIC) assign->restored_from_dynamic();
   // (the per-atom fields may hold the second half of an impulse)
   impulse_pending = (END_IMPULSE >= 0);
   damping->set_kicked((head & DAMP_KICKED) != 0);

@@ -21,8 +21,6 @@ FixStyle(pe_jump/async,FixPEJumpAsync);
 #define LMP_FIX_PE_JUMP_ASYNC_H
 
 #include "fix.h"
-#include "pe_jump_node_sampler.h"
-#include "pe_jump_options.h"
 
 #include <string>
 #include <vector>
@@ -30,12 +28,17 @@ FixStyle(pe_jump/async,FixPEJumpAsync);
 namespace LAMMPS_NS {
 namespace PEJump {
   class AsyncClocks;
+  struct AtomSet;
   class AtomState;
   class ClockAssignment;
   class ClockClasses;
+  struct Evaluations;
   class ForceSampler;
+  struct FreeFlight;
   class InteractionSplit;
   class MovingGhosts;
+  class NodeSampler;
+  struct Options;
   class OtherFixes;
   class ParasiticDamping;
   class Quadrature;
@@ -85,7 +88,7 @@ class FixPEJumpAsync : public Fix {
   double memory_usage() override;
 
  private:
-  using AtomList = PEJump::AtomList;
+  using AtomList = std::vector<int>;
 
   // the parts: the keywords, the quadrature rule, force evaluation, node
   // sampling, per-atom state, the scheme's updates, the stability guard,
@@ -93,7 +96,7 @@ class FixPEJumpAsync : public Fix {
   // communication, what other fixes do, the split of the interactions, where the clocks
   // are inside the coarse step, which atom is on which clock, and the
   // work arrays
-  PEJump::Options opts;
+  PEJump::Options *opts;
   PEJump::Quadrature *rule;
   PEJump::ForceSampler *sampler;
   PEJump::NodeSampler *nodes;
@@ -118,16 +121,16 @@ class FixPEJumpAsync : public Fix {
   // and the coarse quadrature sum of a slow atom's coarse interactions
   int FACC, FSTART_COARSE, END_IMPULSE, FCOARSE;
 
-  PEJump::Evaluations evals;    // force evaluations
-  int changes_seen;             // another fix changed a velocity (this rank)
-  double fine_speed2;           // largest |v|^2 of the moving atoms in this coarse step
-  double fine_change;           // largest velocity change of an atom over a fine step
-  bool reverse_copy;            // the reverse communication sums COPY
-  bigint builds_inside;         // list builds inside coarse steps (this run)
-  bool lists_forced;            // LAMMPS builds the lists in this step whatever the atoms do
-  double end_time;              // update->atime of the coarse step's end
-  bool impulse_at_start;        // END_IMPULSE holds -F(q^0) until the first step
-  bool impulse_pending;         // END_IMPULSE may hold an impulse (else it is 0)
+  PEJump::Evaluations *evals;    // force evaluations
+  int changes_seen;              // another fix changed a velocity (this rank)
+  double fine_speed2;            // largest |v|^2 of the moving atoms in this coarse step
+  double fine_change;            // largest velocity change of an atom over a fine step
+  bool reverse_copy;             // the reverse communication sums COPY
+  bigint builds_inside;          // list builds inside coarse steps (this run)
+  bool lists_forced;             // LAMMPS builds the lists in this step whatever the atoms do
+  double end_time;               // update->atime of the coarse step's end
+  bool impulse_at_start;         // END_IMPULSE holds -F(q^0) until the first step
+  bool impulse_pending;          // END_IMPULSE may hold an impulse (else it is 0)
 
   // SUM: fine quadrature sum, COPY: the coarse interactions' forces at the
   // primary coarse node (owned and ghost atoms) apart from those that
@@ -182,9 +185,6 @@ class FixPEJumpAsync : public Fix {
   double node_cost() const;
   void show_classes();    // vector_atom follows the state table
   void log_steps() const;
-  // values of the global restart state: 16 + head bits, then the census of
-  // the last run's end (TwoStep::NCENSUS), the buffer's reach
-  static constexpr int NGLOBAL = 24;
 };
 
 }    // namespace LAMMPS_NS

@@ -20,6 +20,7 @@
 #include "memory.h"
 #include "modify.h"
 #include "pe_jump_force_sampler.h"
+#include "pe_jump_node_sampler.h"
 #include "update.h"
 
 #include <cmath>

@@ -14,13 +14,15 @@
 #ifndef LMP_PE_JUMP_AUTO_QUADRATURE_H
 #define LMP_PE_JUMP_AUTO_QUADRATURE_H
 
-#include "pe_jump_node_sampler.h"
+#include "pe_jump_atom_set.h"
 #include "pe_jump_quadrature.h"
+#include "pointers.h"
 
 #include <string>
 
 namespace LAMMPS_NS {
 namespace PEJump {
+  class NodeSampler;
 
   // quadrature auto: per step the first of the nested Gauss-Lobatto rules
   // with 2, 3 and 5 points whose pseudo-energy defect is within the

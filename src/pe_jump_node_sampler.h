@@ -14,6 +14,7 @@
 #ifndef LMP_PE_JUMP_NODE_SAMPLER_H
 #define LMP_PE_JUMP_NODE_SAMPLER_H
 
+#include "pe_jump_atom_set.h"
 #include "pe_jump_force_sampler.h"
 #include "pointers.h"
 
@@ -24,39 +25,6 @@ namespace LAMMPS_NS {
 namespace PEJump {
   class ForceSampler;
   class Quadrature;
-
-  using AtomList = std::vector<int>;
-
-  // The owned atoms of a fix group, or a list of them (local indices)
-  struct AtomSet {
-    int groupbit;
-    const AtomList *list;
-
-    // apply one(i) to the atoms of the set; mask and nlocal of class Atom
-    template <typename Function> void each(const int *mask, int nlocal, Function &&one) const
-    {
-      if (list) {
-        for (const int i : *list) one(i);
-        return;
-      }
-      for (int i = 0; i < nlocal; i++)
-        if (mask[i] & groupbit) one(i);
-    }
-  };
-
-  // Free-flight velocities v^{n+1/2} of the owned atoms: atom->v, where
-  // an atom is inside its step, or its node velocity plus half its jump,
-  // where at_node[i] != 0 or for all atoms if all_at_node
-  struct FreeFlight {
-    double **v;
-    double **jump;
-    const int *at_node;
-    bool all_at_node = false;
-    double operator()(int i, int k) const
-    {
-      return (all_at_node || (at_node && at_node[i])) ? v[i][k] + 0.5 * jump[i][k] : v[i][k];
-    }
-  };
 
   // Forces at the quadrature nodes of a step. While nodes are sampled, the
   // forces of the MD step (and the positions of the atoms that move to the

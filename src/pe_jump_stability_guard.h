@@ -14,8 +14,9 @@
 #ifndef LMP_PE_JUMP_STABILITY_GUARD_H
 #define LMP_PE_JUMP_STABILITY_GUARD_H
 
-#include "pe_jump_node_sampler.h"
+#include "pe_jump_atom_set.h"
 #include "pe_jump_reach_bound.h"
+#include "pointers.h"
 
 #include <cmath>
 #include <functional>
@@ -23,6 +24,7 @@
 
 namespace LAMMPS_NS {
 namespace PEJump {
+  class Quadrature;
 
   // Before the atoms move in a step: the nodes where forces will be taken
   // lie on the segments x + t v^{n+1/2}, t in [lo, hi]. The guard measures

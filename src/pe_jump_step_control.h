@@ -14,7 +14,8 @@
 #ifndef LMP_PE_JUMP_STEP_CONTROL_H
 #define LMP_PE_JUMP_STEP_CONTROL_H
 
-#include "pe_jump_node_sampler.h"
+#include "pe_jump_atom_set.h"
+#include "pointers.h"
 
 #include <cmath>
 
