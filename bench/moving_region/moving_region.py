@@ -509,6 +509,8 @@ def summarize(scene, recs):
     for r in [ref] + runs:
         for x in r["rounds"]:
             x.pop("dump", None)
+            if os.path.isabs(x.get("log", "")):
+                x["log"] = os.path.relpath(x["log"], ROOT)
     return {"tolerance": TOLERANCE[scene], "reference": ref, "runs": runs, "summary": summ,
             "scene": {k: v for k, v in SCENES[scene].items() if k not in ("async",)}}
 
@@ -576,7 +578,7 @@ def markdown(res):
           "more wall time each than fix nve's); matched = the fastest fix nve (cascade: nve + "
           "dt/reset) run at least as accurate on every measure of the tolerance, whatever the "
           "tolerance, and the speed-up against it; load = 1-minute load average before the runs "
-          "(min .. max); others' cores = cores used by other processes in the second before a "
+          "(min .. max); others' cores = cores used by other processes in the half second before a "
           "run.", ""]
     L += ["## In brief", ""]
     for s, S in res["scenes"].items():
