@@ -222,12 +222,18 @@ def sha256(path):
     return h.hexdigest()
 
 
+def source_name(path):
+    """the binary's path relative to the repository, or only its name"""
+    rel = os.path.relpath(path, ROOT)
+    return rel if not rel.startswith("..") else os.path.basename(path) + " (outside the repository)"
+
+
 def snapshot_binary(lmp):
     """Copy lmp and the liblammps.so.0 beside it to WORK/bin."""
     src = os.path.abspath(lmp)
     dest = os.path.join(WORK, "bin")
     os.makedirs(dest, exist_ok=True)
-    info = {"source": src}
+    info = {"source": source_name(src)}
     shutil.copy2(src, os.path.join(dest, "lmp"))
     info["lmp_sha256"] = sha256(src)
     lib = os.path.join(os.path.dirname(src), "liblammps.so.0")
@@ -738,6 +744,9 @@ def main():
             res = json.load(f)
         # the comparisons again (with the TOLERANCE of this script)
         res["meta"]["tolerance"] = TOLERANCE
+        src = res["meta"]["binary"].get("source", "")
+        if os.path.isabs(src):
+            res["meta"]["binary"]["source"] = source_name(src)
         for s, S in res["scenes"].items():
             recs = {"ref": S["reference"]}
             recs.update({r["tag"]: r for r in S["runs"]})
