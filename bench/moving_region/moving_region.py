@@ -517,6 +517,8 @@ def summarize(scene, recs):
             x.pop("dump", None)
             if os.path.isabs(x.get("log", "")):
                 x["log"] = os.path.relpath(x["log"], ROOT)
+            if "cmd" in x:
+                x["cmd"] = x["cmd"].replace(ROOT + os.sep, "")
     return {"tolerance": TOLERANCE[scene], "reference": ref, "runs": runs, "summary": summ,
             "scene": {k: v for k, v in SCENES[scene].items() if k not in ("async",)}}
 
