@@ -32,12 +32,12 @@ midpoint, lobatto 2, lobatto 3 and legendre 2 at the scene's usual step:
 Scenes:
   lj       examples/lj-liquid made small (864 atoms, shifted lj/cut, dt 0.005)
            from an equilibrated liquid: positions at t = 0.5, energies to t = 10
-  crack    examples/moving-fast-region/in.crack (LAMMPS' examples/crack,
+  crack    bench/moving_region/in.crack (LAMMPS' examples/crack,
            closed: pre-strain instead of a pulled boundary), T = 6, h = 0.003
   fpu      examples/fpu (h = 1e-3): positions at t = 10, energies to t = 200
   string   examples/nonlinear-string (bench/inputs/in.string, dt 0.0033, T = 1)
   lattice  examples/spring-lattice with fix pe_jump (sync, h = 0.02, T = 70)
-  cascade  the LJ cascade of examples/moving-fast-region/in.cascade under
+  cascade  the LJ cascade of bench/moving_region/in.cascade under
            fix dt/reset (xmax 0.013, dtmax 0.005): max |dE|/Epka
   quadratic the chain of examples/fpu with harmonic soft springs: every
            spring quadratic, where the pseudo-energy of midpoint and lobatto 2
@@ -210,7 +210,7 @@ def scene_lj(a):
 
 def scene_crack(a):
     wd = os.path.join(WORK, "crack")
-    inp = os.path.join(EX, "moving-fast-region", "in.crack")
+    inp = os.path.join(ROOT, "bench", "moving_region", "in.crack")
     h, T = 0.003, 6.0
     refs = {}
     for k in (8, 4):
@@ -233,7 +233,7 @@ def scene_crack(a):
         row.update(energy_stats(r, "v_E", "v_Ht", nmob))
         rows.append(row)
     add_ratios(rows)
-    return {"desc": "crack of examples/moving-fast-region/in.crack (LAMMPS' examples/crack: 2d LJ, 8141 "
+    return {"desc": "crack of bench/moving_region/in.crack (LAMMPS' examples/crack: 2d LJ, 8141 "
                     "atoms, 7537 mobile; closed system: pre-strain 0.10 instead of the pulled boundary, "
                     "pair_modify shift yes), h = 0.003, T = 6 (2000 steps), output every 20 steps; "
                     "energies per mobile atom",
@@ -396,7 +396,7 @@ def scene_cascade(a):
         row.update(energy_stats(r, "v_E", "v_Ht", Epka))
         rows.append(row)
     add_ratios(rows, ("dE_max",))
-    return {"desc": "LJ cascade of examples/moving-fast-region/in.cascade (4000 atoms, fcc 1.07, lj/cut 2.5 "
+    return {"desc": "LJ cascade of bench/moving_region/in.cascade (4000 atoms, fcc 1.07, lj/cut 2.5 "
                     "shifted, T0 0.01, PKA 2000 epsilon) under fix dt/reset 1 NULL 0.005 0.013 units box "
                     "(first step 2e-4), t = 0 to 1, output every 10 steps; energies divided by Epka",
             "Epka": Epka, "xmax": xmax, "dtmax": 0.005, "energy_norm": "per Epka", "rows": rows}
