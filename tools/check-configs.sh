@@ -8,7 +8,7 @@
 # runs examples/fpu-slow-fast for a short time with fix pe_jump/async and
 # fix pe_jump; a build error or a run that does not end is a failure.
 #
-#   bash tools/check-configs.sh [serial] [bigbig]     (default: both)
+#   bash tools/check-configs.sh [serial] [bigbig]     (default: both; JOBS=n: n compile jobs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 TOP=$PWD
@@ -32,7 +32,7 @@ check() {
   cmake -S . -B "$dir" -G Ninja -D CMAKE_BUILD_TYPE=Release -D LAMMPS_SOURCE_DIR="$TREE" \
     -D PEJUMP_ENABLE_TESTING=off -D PEJUMP_BUILD_PLUGIN=off -D "PEJUMP_PACKAGES=MOLECULE;CLASS2" \
     -D BUILD_OMP=off $args > "$dir.log" 2>&1 || { tail -30 "$dir.log"; return 1; }
-  cmake --build "$dir" -j "$(nproc)" >> "$dir.log" 2>&1 || { grep -B2 -A8 "error" "$dir.log" | head -60; return 1; }
+  cmake --build "$dir" -j "${JOBS:-$(nproc)}" >> "$dir.log" 2>&1 || { grep -B2 -A8 "error" "$dir.log" | head -60; return 1; }
   local work
   work=$(mktemp -d)
   for integrator in async sync; do
