@@ -329,11 +329,11 @@ void FixPEJump::setup(int /*vflag*/)
   scheme->agree_on_started(group_atoms(), style, (opts->compensate < 0) && !steps->adapts(),
                            nodes->tallied(true));
   nodes->ask_energy_at(update->laststep);    // for the next run to compare
-  const int change = scheme->started ? scheme->velocity_change(group_atoms(), true) : 0;
+  const int change = scheme->has_started() ? scheme->velocity_change(group_atoms(), true) : 0;
   const double pe = steps->adapts() ? potential_now() : 0.0;
-  if ((!scheme->started || (change == 2)) && !scheme->reading_snapshots())
+  if ((!scheme->has_started() || (change == 2)) && !scheme->reading_snapshots())
     steps->first_step(style, group_atoms(), atom->f, pe);
-  if (!scheme->started)
+  if (!scheme->has_started())
     start_scheme(nullptr, true);
   else if (change == 2)
     start_scheme("velocities were changed since the last run: restarting the two-step scheme "
@@ -790,7 +790,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 
   reinit_pending = with_start && (opts->init_style == PEJump::Options::KICK) && !split_primary() &&
       sampler->has_projections();
-  scheme->started = 1;
+  scheme->set_started(true);
   steps->forget();
   damping->forget_history();
   guard->forget_stats();
@@ -1238,7 +1238,7 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  list[HEAD] = (scheme->started > 0 ? HEAD_STARTED : 0) + (damping->kicked() ? HEAD_KICKED : 0) +
+  list[HEAD] = (scheme->has_started() ? HEAD_STARTED : 0) + (damping->kicked() ? HEAD_KICKED : 0) +
       (damping->has_history() ? HEAD_DAMPED : 0) + (damping->allocated() ? HEAD_DAMP_FIELDS : 0);
   list[FORMAT] = RESTART_FORMAT;
   list[FAMILY] = rule->family();
@@ -1258,13 +1258,13 @@ void FixPEJump::restart(char *buf)
   const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
       (static_cast<int>(list[POINTS]) == rule->points());
   const int head = static_cast<int>(list[HEAD]);
-  scheme->started = ((head & HEAD_STARTED) != 0) && same_rule;
+  scheme->set_started(((head & HEAD_STARTED) != 0) && same_rule);
   evals->total = list[EVALS_TOTAL];
   steps->load(&list[STEPS]);
   scheme->load_census(&list[CENSUS]);
   damping->set_kicked((head & HEAD_KICKED) != 0);
   if (head & HEAD_DAMP_FIELDS) damping->allocate();
-  damping->set_history(((head & HEAD_DAMPED) != 0) && scheme->started);
+  damping->set_history(((head & HEAD_DAMPED) != 0) && scheme->has_started());
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "
@@ -1286,7 +1286,7 @@ int FixPEJump::pack_restart(int i, double *buf)
 void FixPEJump::unpack_restart(int nlocal, int nth)
 {
   // a misfit is told by TwoStep::agree_on_started()
-  if (!state->unpack_restart(nlocal, nth)) scheme->started = -1;
+  if (!state->unpack_restart(nlocal, nth)) scheme->restart_data_unfit();
 }
 
 /* ---------------------------------------------------------------------- */

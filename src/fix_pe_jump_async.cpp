@@ -324,7 +324,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
-  if (assign->assign_buffer(scheme->started, *split)) split->invalidate();
+  if (assign->assign_buffer(scheme->has_started(), *split)) split->invalidate();
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (!split->up_to_date()) post_neighbor();
@@ -338,7 +338,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
                    !domain->box_change);
   evals->step = 0.0;
-  if (!scheme->started)
+  if (!scheme->has_started())
     start_scheme(nullptr, true);
   else
     continue_scheme();
@@ -794,7 +794,7 @@ int FixPEJumpAsync::pack_restart(int i, double *buf)
 void FixPEJumpAsync::unpack_restart(int nlocal, int nth)
 {
   // a misfit is told by TwoStep::agree_on_started()
-  if (!state->unpack_restart(nlocal, nth)) scheme->started = -1;
+  if (!state->unpack_restart(nlocal, nth)) scheme->restart_data_unfit();
   show_classes();
 }
 
@@ -852,7 +852,7 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
   // ghost atoms were rebuilt: the fine steps need lists that fit them)
   const bool stale = scheme->awaits_setup() &&
       scheme->check_run_without_setup(style, group_atoms(), assign->changed());
-  if (scheme->started) change_clocks();
+  if (scheme->has_started()) change_clocks();
   node_impulses();
   lists_forced = guard->rebuild_forced();
   begin_coarse_step();
@@ -1622,7 +1622,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   } else {
     kick_with(atom->f);
   }
-  scheme->started = 1;
+  scheme->set_started(true);
   damping->forget_history();
   guard->forget_stats();
 }
@@ -1674,7 +1674,7 @@ double FixPEJumpAsync::compute_vector(int n)
 void FixPEJumpAsync::write_restart(FILE *fp)
 {
   double list[NGLOBAL] = {};
-  list[HEAD] = (scheme->started > 0 ? HEAD_STARTED : 0) +
+  list[HEAD] = (scheme->has_started() ? HEAD_STARTED : 0) +
       (assign->dynamic_group() ? HEAD_DYNAMIC : 0) + (damping->kicked() ? DAMP_KICKED : 0) +
       (damping->allocated() ? DAMP_FIELDS : 0) +
       (damping->has_history(FINE_CLOCK) ? DAMP_FINE : 0) +
@@ -1703,14 +1703,14 @@ void FixPEJumpAsync::restart(char *buf)
   const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
       (static_cast<int>(list[POINTS]) == rule->points());
   const int head = static_cast<int>(list[HEAD]);
-  scheme->started = (head & HEAD_STARTED) != 0;
+  scheme->set_started((head & HEAD_STARTED) != 0);
   evals->total = list[EVALS_TOTAL];
   scheme->load_census(&list[CENSUS]);
   const auto restarts = [&](const std::string &why) {
-    if (scheme->started && (comm->me == 0))
+    if (scheme->has_started() && (comm->me == 0))
       utils::logmesg(lmp, "Fix {}: {}: the two-step scheme restarts from the current state\n",
                      style, why);
-    scheme->started = 0;
+    scheme->set_started(false);
   };
   if (!same_rule) restarts("quadrature differs from the restart file");
   if (static_cast<int>(list[NFINE]) != clocks->steps()) restarts("K differs from the restart file");
@@ -1720,8 +1720,8 @@ void FixPEJumpAsync::restart(char *buf)
   impulse_pending = (END_IMPULSE >= 0);
   damping->set_kicked((head & DAMP_KICKED) != 0);
   if (head & DAMP_FIELDS) damping->allocate();
-  damping->set_history(((head & DAMP_FINE) != 0) && scheme->started, FINE_CLOCK);
-  damping->set_history(((head & DAMP_COARSE) != 0) && scheme->started, COARSE_CLOCK);
+  damping->set_history(((head & DAMP_FINE) != 0) && scheme->has_started(), FINE_CLOCK);
+  damping->set_history(((head & DAMP_COARSE) != 0) && scheme->has_started(), COARSE_CLOCK);
 }
 
 /* ----------------------------------------------------------------------
@@ -1733,13 +1733,13 @@ void FixPEJumpAsync::restart(char *buf)
 
 void FixPEJumpAsync::check_clocks()
 {
-  if (!assign->changed() || !scheme->started) return;
+  if (!assign->changed() || !scheme->has_started()) return;
   if (comm->me == 0)
     utils::logmesg(lmp,
                    "Fix {}: the atoms on the fine clock changed since the last run: restarting "
                    "the two-step scheme at this coarse node\n",
                    style);
-  scheme->started = 0;
+  scheme->set_started(false);
 }
 
 /* ----------------------------------------------------------------------

@@ -32,7 +32,7 @@ using namespace LAMMPS_NS::PEJump;
 /* ---------------------------------------------------------------------- */
 
 TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
-    Pointers(lmp), started(0), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}, at_end(),
+    Pointers(lmp), fresh(0), state(table), cached_step(-1), cached{0.0, 0.0}, at_end(),
     minimized(false), pending_setup(false), reinitialized(false)
 {
   at_end.atoms = -1;    // no run yet

@@ -38,8 +38,13 @@ namespace PEJump {
    public:
     TwoStep(class LAMMPS *, AtomState &, bool start_nodes);
 
-    int started;    // 1 once the state is valid (-1: restart data did not fit)
-    int fresh;      // 1 if atoms were created since the last setup (this rank)
+    // the per-atom state is valid (the scheme has started); set by a start,
+    // cleared where the state no longer fits, told to every rank by
+    // agree_on_started() at setup
+    bool has_started() const { return started > 0; }
+    void set_started(bool yes) { started = yes ? 1 : 0; }
+    void restart_data_unfit() { started = -1; }    // (this rank, until setup)
+    int fresh;    // 1 if atoms were created since the last setup (this rank)
 
     double **jump() const;
     double *vsig() const;
@@ -157,6 +162,7 @@ namespace PEJump {
     void energies_now(const AtomSet &, double *e) const;
 
    private:
+    int started = 0;    // 1 valid, 0 not, -1 restart data did not fit (this rank)
     template <bool AHEAD, bool SIGN, bool DAMP>
     void jump_loop_as(const AtomSet &, double **favg, const Loop &, double *mag,
                       const ParasiticDamping::Step *damp) const;

@@ -25,14 +25,16 @@ configure_args() {
 }
 
 check() {
-  local name=$1 dir=$TOP/build-$1 args
+  local name=$1 dir=$TOP/build-$1 args log
   args=$(configure_args "$name")
+  log=$dir/check-configs.log
+  mkdir -p "$dir"
   echo "== $name: configure and build ($args)"
   # shellcheck disable=SC2086
   cmake -S . -B "$dir" -G Ninja -D CMAKE_BUILD_TYPE=Release -D LAMMPS_SOURCE_DIR="$TREE" \
     -D PEJUMP_ENABLE_TESTING=off -D PEJUMP_BUILD_PLUGIN=off -D "PEJUMP_PACKAGES=MOLECULE;CLASS2" \
-    -D BUILD_OMP=off $args > "$dir.log" 2>&1 || { tail -30 "$dir.log"; return 1; }
-  cmake --build "$dir" -j "${JOBS:-$(nproc)}" >> "$dir.log" 2>&1 || { grep -B2 -A8 "error" "$dir.log" | head -60; return 1; }
+    -D BUILD_OMP=off $args > "$log" 2>&1 || { tail -30 "$log"; return 1; }
+  cmake --build "$dir" -j "${JOBS:-$(nproc)}" >> "$log" 2>&1 || { grep -B2 -A8 "error" "$log" | head -60; return 1; }
   local work
   work=$(mktemp -d)
   for integrator in async sync; do
