@@ -111,7 +111,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
 
   // the per-atom state; step control adds the force history it needs
   state = new AtomState(lmp);
-  scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
+  scheme = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
   const bool compensate = (opts->compensate < 0) ? (opts->adapt_eps > 0.0)
                                                  : (opts->compensate != 0);
   steps = new StepControl(lmp, *state, opts->adapt_eps, opts->adapt_dtmin, opts->adapt_dtmax,
@@ -577,7 +577,7 @@ AtomSet FixPEJump::group_atoms() const
 
 void FixPEJump::check_lists()
 {
-  const int first = rule->has_end_nodes() ? 1 : 0;
+  const int first = rule->first_sampled();
   const double c_hi = nodes->step_end_evaluated() ? 1.0 : rule->node.back();
   check_excursion(rule->node[first] * h_step, c_hi * h_step);
 }
@@ -774,7 +774,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
   if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
 
   grow_work();
-  if (with_start && rule->has_end_nodes())
+  if (with_start && rule->reuses_start_node())
     store_start_node();
   else if (with_start && split_primary())
     primary_sampled_force();
@@ -857,7 +857,7 @@ void FixPEJump::refresh_start_nodes()
 {
   int any = 0;
   MPI_Allreduce(&scheme->fresh, &any, 1, MPI_INT, MPI_MAX, world);
-  if (!any || !rule->has_end_nodes()) return;
+  if (!any || !rule->reuses_start_node()) return;
 
   // the new atoms (start node still unknown) also get the initial kick
   AtomList fresh;
@@ -888,8 +888,7 @@ void FixPEJump::quadrature_sum()
   }
 
   const int p = rule->primary();
-  const double wp = rule->weight[p];
-  const int reuse_start = rule->has_end_nodes();
+  const int reuse_start = rule->reuses_start_node();
   double **fstart = scheme->fstart();
 
   if (split_primary()) primary_sampled_force();
@@ -899,20 +898,12 @@ void FixPEJump::quadrature_sum()
   // this step's start node
   double **fp = split_primary() ? fsample() : atom->f;
   double **sum = fsum();
-  const double w0 = rule->weight[0];
+  const auto begin = rule->start_sum();
   for_atoms([&](int i) {
-    if (reuse_start && std::isnan(fstart[i][0]))
-      for (int k = 0; k < 3; k++) fstart[i][k] = fp[i][k];
-    for (int k = 0; k < 3; k++) {
-      sum[i][k] = wp * fp[i][k];
-      if (reuse_start) {
-        sum[i][k] += w0 * fstart[i][k];
-        fstart[i][k] = fp[i][k];
-      }
-    }
+    begin(fp[i], reuse_start ? fstart[i] : nullptr, sum[i]);
   });
 
-  const int first = reuse_start ? 1 : 0;
+  const int first = rule->first_sampled();
   if (rule->size() - first <= 1) return;
   // with a Lobatto rule the total force at the primary node (the step end)
   // is needed afterwards only for the impulses of forces outside the rule,

@@ -139,9 +139,9 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   tally = new PEJump::SplitTally(lmp);
   work = new PEJump::WorkForces(lmp, 2);
   state = new AtomState(lmp);
-  scheme = new PEJump::TwoStep(lmp, *state, rule->has_end_nodes());
+  scheme = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
   FACC = state->add("facc", 3, 0.0);
-  FSTART_COARSE = rule->has_end_nodes() ? state->add("fstart_coarse", 3, 0.0) : -1;
+  FSTART_COARSE = rule->reuses_start_node() ? state->add("fstart_coarse", 3, 0.0) : -1;
   END_IMPULSE = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
   FCOARSE = state->add("fcoarse", 3, 0.0);
   damping = new PEJump::ParasiticDamping(*state);
@@ -975,7 +975,7 @@ void FixPEJumpAsync::hold_until(double t)
 bool FixPEJumpAsync::check_fine_nodes(double into)
 {
   const double h = clocks->fine_step();
-  const double lo = rule->node[rule->has_end_nodes() ? 1 : 0] * h - into;
+  const double lo = rule->node[rule->first_sampled()] * h - into;
   const double hi = rule->node.back() * h - into;
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
@@ -1113,25 +1113,15 @@ void FixPEJumpAsync::pre_force(int /*vflag*/)
 void FixPEJumpAsync::fine_quadrature_sum()
 {
   const int p = rule->primary();
-  const double wp = rule->weight[p];
-  const int reuse_start = rule->has_end_nodes();
+  const bool reuse_start = rule->reuses_start_node();
   double **f = atom->f;
   double **fstart = scheme->fstart();
   double **fsum = work->get(SUM);
   const AtomList &moving = assign->moving_atoms;
 
-  for (const int i : moving) {
-    if (reuse_start && std::isnan(fstart[i][0]))
-      for (int k = 0; k < 3; k++) fstart[i][k] = f[i][k];
-    for (int k = 0; k < 3; k++) {
-      fsum[i][k] = wp * f[i][k];
-      if (reuse_start) {
-        fsum[i][k] += rule->weight[0] * fstart[i][k];
-        fstart[i][k] = f[i][k];
-      }
-    }
-  }
-  const int first = reuse_start ? 1 : 0;
+  const auto begin = rule->start_sum();
+  for (const int i : moving) begin(f[i], reuse_start ? fstart[i] : nullptr, fsum[i]);
+  const int first = rule->first_sampled();
   if (rule->size() - first <= 1) return;
   const double h = clocks->fine_step();
   const int evaluated =
@@ -1243,16 +1233,9 @@ void FixPEJumpAsync::add_fine_forces_at_end()
 void FixPEJumpAsync::keep_coarse_primary(double **f)
 {
   double **fcoarse = state->vec(FCOARSE);
-  double **fstart = rule->has_end_nodes() ? state->vec(FSTART_COARSE) : nullptr;
-  const double wp = rule->weight[rule->primary()];
-  for (const int i : assign->slow_atoms)
-    for (int k = 0; k < 3; k++) {
-      fcoarse[i][k] = wp * f[i][k];
-      if (fstart) {
-        fcoarse[i][k] += rule->weight[0] * fstart[i][k];
-        fstart[i][k] = f[i][k];
-      }
-    }
+  double **fstart = rule->reuses_start_node() ? state->vec(FSTART_COARSE) : nullptr;
+  const auto begin = rule->start_sum();
+  for (const int i : assign->slow_atoms) begin(f[i], fstart ? fstart[i] : nullptr, fcoarse[i]);
 }
 
 /* ----------------------------------------------------------------------
@@ -1324,7 +1307,7 @@ void FixPEJumpAsync::end_impulse_first_half()
 
 void FixPEJumpAsync::coarse_quadrature_sum()
 {
-  const int first = rule->has_end_nodes() ? 1 : 0;
+  const int first = rule->first_sampled();
   if (rule->size() - first <= 1) return;
   const double coarse = update->dt;
   // the slow atoms' nodes inside the coarse step, away from where LAMMPS
@@ -1356,7 +1339,7 @@ void FixPEJumpAsync::coarse_quadrature_sum()
 
 bool FixPEJumpAsync::primary_is_last_node() const
 {
-  const int first = rule->has_end_nodes() ? 1 : 0;
+  const int first = rule->first_sampled();
   return (rule->node[rule->primary()] == 1.0) && (rule->size() - first <= 1);
 }
 
@@ -1385,8 +1368,8 @@ template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double *
   double **v = atom->v;
   double **jump = scheme->jump();
   double **facc = state->vec(FACC);
-  double **fstart = (PRIMARY && rule->has_end_nodes()) ? state->vec(FSTART_COARSE) : nullptr;
-  const double wp = rule->weight[rule->primary()], w0 = rule->weight[0];
+  double **fstart = (PRIMARY && rule->reuses_start_node()) ? state->vec(FSTART_COARSE) : nullptr;
+  const auto begin = rule->start_sum();
   const double coarse = update->dt;
   const double kick = 2.0 * coarse * force->ftm2v;
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
@@ -1400,17 +1383,14 @@ template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double *
   const double per_time = 1.0 / coarse;
   double vv = mag[0], jj = mag[1];
   for (const int i : assign->slow_atoms) {
-    double fslow[3], most[2] = {0.0, 0.0};
+    double fslow[3], most[2] = {0.0, 0.0}, sum[3];
+    const double *fc = fcoarse[i];
+    if (PRIMARY) {
+      begin(fcoarse[i], fstart ? fstart[i] : nullptr, sum);
+      fc = sum;
+    }
     for (int k = 0; k < 3; k++) {
-      double fc = fcoarse[i][k];
-      if (PRIMARY) {
-        fc = wp * fcoarse[i][k];
-        if (fstart) {
-          fc += w0 * fstart[i][k];
-          fstart[i][k] = fcoarse[i][k];
-        }
-      }
-      fslow[k] = facc[i][k] * per_time + fc;
+      fslow[k] = facc[i][k] * per_time + fc[k];
       facc[i][k] = 0.0;
     }
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
@@ -1592,7 +1572,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   }
   if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
   grow_work();
-  if (with_start && rule->has_end_nodes()) store_start_node();
+  if (with_start && rule->reuses_start_node()) store_start_node();
   const double kick = (opts->init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
   const double coarse = update->dt, fine = coarse / clocks->steps();
   const auto kick_with = [&](double **f) {

@@ -14,6 +14,7 @@
 #ifndef LMP_PE_JUMP_QUADRATURE_H
 #define LMP_PE_JUMP_QUADRATURE_H
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,34 @@ namespace PEJump {
     // every node is a step end (lobatto 2): atoms of another time
     // integrator may then interact with the atoms of the rule
     bool only_end_nodes() const { return (fam == LOBATTO) && (size() == 2); }
+
+    // the start node is the previous step's end node: its forces are kept
+    // from there (fstart) instead of sampled again
+    bool reuses_start_node() const { return has_end_nodes(); }
+    // the first node that is sampled (after a reused start node)
+    int first_sampled() const { return reuses_start_node() ? 1 : 0; }
+
+    // the terms of the quadrature sum known once the primary node is
+    // evaluated, for one atom: sum = w_p fp (+ w_0 fstart with a reused
+    // start node, whose forces then become fp, the next step's start; an
+    // unset start, NaN, takes fp)
+    struct StartSum {
+      double wp, w0;
+      bool reuse;
+      void operator()(const double *fp, double *fstart, double *sum) const
+      {
+        if (reuse && std::isnan(fstart[0]))
+          for (int k = 0; k < 3; k++) fstart[k] = fp[k];
+        for (int k = 0; k < 3; k++) {
+          sum[k] = wp * fp[k];
+          if (reuse) {
+            sum[k] += w0 * fstart[k];
+            fstart[k] = fp[k];
+          }
+        }
+      }
+    };
+    StartSum start_sum() const { return {weight[primary()], weight[0], reuses_start_node()}; }
 
     // node used for the force evaluation that the MD loop does anyway:
     // the end node for Lobatto rules, the middle (or first past the middle)

@@ -129,3 +129,30 @@ TEST(Quadrature, NestedLobattoRulesShareTheirNodes)
   // every node of the finest rule is evaluated once over the three levels
   EXPECT_EQ(added_total, finest.size());
 }
+
+// the start of the quadrature sum: a Lobatto rule's start node is the last
+// step's end node (an unset one, NaN, is the primary node's forces), a
+// Legendre rule has none
+TEST(Quadrature, StartSumReusesTheLastEndNode)
+{
+  const double nan = std::nan("");
+  const Quadrature lobatto(Quadrature::LOBATTO, 3);
+  ASSERT_TRUE(lobatto.reuses_start_node());
+  EXPECT_EQ(lobatto.first_sampled(), 1);
+  const auto begin = lobatto.start_sum();
+  double fstart[3] = {nan, nan, nan}, sum[3];
+  const double f1[3] = {6.0, -12.0, 0.5}, f2[3] = {3.0, 0.0, 1.0};
+  begin(f1, fstart, sum);    // first step: start = end = f1
+  for (int k = 0; k < 3; k++) EXPECT_DOUBLE_EQ(sum[k], (1.0 / 6.0 + 1.0 / 6.0) * f1[k]) << k;
+  begin(f2, fstart, sum);    // next step: start f1, end f2
+  for (int k = 0; k < 3; k++) {
+    EXPECT_DOUBLE_EQ(sum[k], f1[k] / 6.0 + f2[k] / 6.0) << k;
+    EXPECT_EQ(fstart[k], f2[k]) << k;
+  }
+
+  const Quadrature legendre(Quadrature::LEGENDRE, 1);
+  EXPECT_FALSE(legendre.reuses_start_node());
+  EXPECT_EQ(legendre.first_sampled(), 0);
+  legendre.start_sum()(f1, nullptr, sum);
+  for (int k = 0; k < 3; k++) EXPECT_EQ(sum[k], f1[k]) << k;
+}
