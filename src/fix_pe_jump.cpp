@@ -972,7 +972,7 @@ void FixPEJump::check_excursion(double lo, double hi)
     else
       guard->forget_reach();
   } else {
-    const StabilityGuard::Nodes at{h_step, lo, hi, cp, nullptr, 0.0, 0.0, 0.0, nullptr};
+    const StabilityGuard::Nodes at{h_step, lo, hi};
     guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
   }
   finish_check(local);

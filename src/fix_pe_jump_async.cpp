@@ -995,8 +995,7 @@ bool FixPEJumpAsync::check_fine_nodes(double into)
     else
       guard->forget_reach();
   } else {
-    const double cp = rule->node[rule->primary()] * h - into;
-    const StabilityGuard::Nodes at{h, lo, hi, cp, nullptr, 0.0, 0.0, h, nullptr};
+    const StabilityGuard::Nodes at{h, lo, hi};
     guard->measure(group_atoms(&assign->moving_atoms), free_flight(), scheme->jump(), xhold, at,
                    local);
     // the slow atoms' speeds and jumps as the coarse node left them (the

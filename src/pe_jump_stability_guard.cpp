@@ -87,8 +87,7 @@ void StabilityGuard::measure(const AtomSet &set, const FreeFlight &vel, double *
   double **x = atom->x;
   set.each(atom->mask, atom->nlocal, [&](int i) {
     const double vhalf[3] = {vel(i, 0), vel(i, 1), vel(i, 2)};
-    measure_one(x[i], xhold ? xhold[i] : nullptr, vhalf, jump[i], at, at.select && at.select[i],
-                at.lag ? at.lag[i] : 0.0, local);
+    measure_one(x[i], xhold ? xhold[i] : nullptr, vhalf, jump[i], at, local);
   });
 }
 

@@ -63,41 +63,31 @@ namespace PEJump {
     double slow_jump2() const { return slow[1]; }
 
     // the measures of the atoms of set from their state, for steps of size
-    // h: nodes at t in [lo, hi]; atoms with select[i] != 0 take steps of
-    // size hsel and also visit t in [lo2, hi2] (+ lag[i] if given), cp the
-    // primary node of the step
+    // h: nodes at t in [lo, hi] from where the atoms are
     struct Nodes {
-      double h, lo, hi, cp;
-      const int *select;
-      double lo2, hi2, hsel;
-      const double *lag;
+      double h, lo, hi;
     };
     void measure(const AtomSet &, const FreeFlight &, double **jump, double **xhold, const Nodes &,
                  double *local) const;
 
     // the same for one atom at x (xhold its build position or null) moving
-    // with vhalf, both: it is selected, late: its lag
+    // with vhalf
     static void measure_one(const double *x, const double *xhold, const double *vhalf,
-                            const double *jump, const Nodes &at, bool both, double late,
-                            double *local)
+                            const double *jump, const Nodes &at, double *local)
     {
-      const double h = both ? at.hsel : at.h;
-      double vv = 0.0, jj = 0.0, d[4] = {0.0, 0.0, 0.0, 0.0};
+      double vv = 0.0, jj = 0.0, d[2] = {0.0, 0.0};
       for (int k = 0; k < 3; k++) {
         vv += vhalf[k] * vhalf[k];
         jj += jump[k] * jump[k];
         if (xhold) {
           const double a = x[k] - xhold[k];
-          const double ends[4] = {a + at.lo * vhalf[k], a + at.hi * vhalf[k],
-                                  a + (at.lo2 + late) * vhalf[k], a + (at.hi2 + late) * vhalf[k]};
-          for (int e = 0; e < (both ? 4 : 2); e++) d[e] += ends[e] * ends[e];
+          const double ends[2] = {a + at.lo * vhalf[k], a + at.hi * vhalf[k]};
+          for (int e = 0; e < 2; e++) d[e] += ends[e] * ends[e];
         }
       }
-      double span = h;
-      if (both) span = MAX(span, MAX(fabs(at.lo2 - at.cp), fabs(at.hi2 - at.cp)));
-      double step = span * span * vv, jmp = h * h * jj;
+      double step = at.h * at.h * vv, jmp = at.h * at.h * jj;
       if (!std::isfinite(step) || !std::isfinite(jmp)) step = jmp = vv = jj = BLOWUP;
-      local[0] = MAX(local[0], MAX(MAX(d[0], d[1]), MAX(d[2], d[3])));
+      local[0] = MAX(local[0], MAX(d[0], d[1]));
       local[1] = MAX(local[1], step);
       local[2] = MAX(local[2], jmp);
       local[3] = MAX(local[3], jj);
