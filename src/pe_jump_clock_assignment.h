@@ -87,7 +87,6 @@ namespace PEJump {
     // that at the first change and kinetic(), collective, called only
     // then), an error where they added more than half of it
     void add_change_energy(double dh, const std::function<double()> &kinetic, const char *style);
-    const std::string &fast_group_name() const { return fast_group; }
     // true if the atoms on the fine clock changed since the last call (global)
     bool changed();
 
@@ -97,7 +96,6 @@ namespace PEJump {
     void find_moving(const InteractionSplit &);
     const int *slow() const { return slow_flag.data(); }
     const int *moving() const { return moving_flag.data(); }
-    const int *participants() const { return participant.data(); }    // owned and ghost
     AtomList moving_atoms;    // the atoms of the group that move on fine steps:
     AtomList fast_atoms;      // those on the fine clock
     AtomList slow_moving;     // and the slow ones in a fine interaction
@@ -107,9 +105,8 @@ namespace PEJump {
     // restart: buffer layers and fine-clock atoms (number, ID hash) of
     // the last run (3 values in list), the fast group at the last
     // assignment (number, ID hash: 2 values in seen), which tells whether
-    // a dynamic group changed when it is next evaluated (seen = {0, 0}
-    // from older files: the group counts as changed), and the buffer's
-    // reach (nullptr from older files: 0)
+    // a dynamic group changed when it is next evaluated, and the buffer's
+    // reach
     void save(double *list, double *seen, double *reach) const;
     void restore(const double *list, const double *seen, const double *reach);
 

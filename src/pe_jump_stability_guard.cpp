@@ -57,7 +57,6 @@ void StabilityGuard::start_run(bool free_flight_only)
   trusted = free_flight_only;
   valid = false;
   reach.forget();
-  all.forget();
   jump_ref = 0.0;
   hinted = 0;
 }
@@ -103,18 +102,6 @@ bool StabilityGuard::ends_checked(const Quadrature &rule, double lo, double hi, 
 {
   return rule.has_end_nodes() && (neighbor->every == 1) && (neighbor->delay == 0) && (lo >= 0.0) &&
       (hi <= h);
-}
-
-/* ----------------------------------------------------------------------
-   Neighbor::decide() checks the distances at a step if ago + 1 >= delay
-   and (ago + 1) % every == 0 (ago counts the steps since the last build)
-------------------------------------------------------------------------- */
-
-bool StabilityGuard::lists_checked_now(const Neighbor *neighbor)
-{
-  if (!neighbor->dist_check || neighbor->build_once) return false;
-  const int ago = neighbor->ago + 1;
-  return (ago >= neighbor->delay) && (ago % neighbor->every == 0);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -173,9 +160,7 @@ double StabilityGuard::clear() const
 
 void StabilityGuard::step(double h)
 {
-  const double moved = travel(h, MAX(stats[0], slow[0]), 3);
-  reach.moved(moved);
-  all.moved(moved);
+  reach.moved(travel(h, MAX(stats[0], slow[0]), 3));
 }
 
 /* ----------------------------------------------------------------------
@@ -185,34 +170,13 @@ void StabilityGuard::step(double h)
 double StabilityGuard::excursion_since(const AtomSet &set, const FreeFlight &vel, double **xhold,
                                        double lo, double hi)
 {
-  if (free_flight_only() && (reach.within(clear(), neighbor->ncalls) || all_within())) return 0.0;
+  if (free_flight_only() && reach.within(clear(), neighbor->ncalls)) return 0.0;
   const double worst = excursion(set, vel, xhold, lo, hi);
   if (free_flight_only())
     reach.measured(sqrt(worst) + travel(update->dt, MAX(stats[0], slow[0]), 3), neighbor->ncalls);
   else
     reach.forget();
   return worst;
-}
-
-/* ---------------------------------------------------------------------- */
-
-bool StabilityGuard::all_within() const
-{
-  return free_flight_only() && all.within(clear(), neighbor->ncalls);
-}
-
-/* ----------------------------------------------------------------------
-   the slow atoms' nodes measured lie inside the coarse step, its fine
-   atoms' inside its last fine step: the bound covers the coarse step
-------------------------------------------------------------------------- */
-
-void StabilityGuard::all_measured(double worst, double coarse_step, int fine_steps)
-{
-  if (free_flight_only())
-    all.measured(sqrt(worst) + travel(coarse_step, MAX(stats[0], slow[0]), 3 * fine_steps),
-                 neighbor->ncalls);
-  else
-    all.forget();
 }
 
 /* ---------------------------------------------------------------------- */

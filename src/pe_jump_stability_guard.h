@@ -51,7 +51,6 @@ namespace PEJump {
     {
       valid = false;
       reach.forget();
-      all.forget();
     }
     bool has_stats() const { return valid; }
     double speed2() const { return stats[0]; }
@@ -98,9 +97,6 @@ namespace PEJump {
     // t in [lo, hi], of a step h whose nodes include both ends
     bool ends_checked(const Quadrature &, double lo, double hi, double h) const;
 
-    // true if Neighbor::decide() checks the list distances at this step
-    // (neigh_modify check yes, and every and delay let it)
-    static bool lists_checked_now(const class Neighbor *);
     // true if the Verlet loop rebuilds the lists in this step whatever the
     // atoms' positions (neigh_modify check no: every N steps, or a restart
     // file or a fix asks for it); with a distance check it is up to LAMMPS
@@ -125,12 +121,6 @@ namespace PEJump {
     double excursion_since(const AtomSet &, const FreeFlight &, double **xhold, double lo,
                            double hi);
     void forget_reach() { reach.forget(); }
-    // pe_jump/async: true if no atom of the group can be beyond half the
-    // skin now or at a node up to the end of this step, from the largest
-    // excursion^2 of all of them at the last coarse node (all_measured(),
-    // with the coarse step and its number of fine steps)
-    bool all_within() const;
-    void all_measured(double worst, double coarse_step, int fine_steps);
 
     enum Verdict { FINE, REBUILD, UNSTABLE, TOO_FAR };
     Verdict judge(const double *global);    // the reduced measures
@@ -153,7 +143,6 @@ namespace PEJump {
     int hinted;          // steps in a row with grown jumps that move atoms far
     bool trusted;        // only the fix moves the atoms, with the speeds of the stats
     ReachBound reach;    // of the nodes of the atoms measured by excursion_since()
-    ReachBound all;      // of all atoms, measured at coarse nodes
 
     bool free_flight_only() const { return trusted && valid; }
     double travel(double t, double speed2, int moves) const;

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Structure figures of src/ at a git revision (doc/architecture.md).
+"""Structure figures of src/ at a git revision (file and function sizes, members per class).
 
     python3 tools/structure.py [--rev REV] [--top N] [--members] [--all-functions]
 
