@@ -86,9 +86,9 @@ using PEJump::StepControl;
 /* ---------------------------------------------------------------------- */
 
 FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
-    Fix(lmp, narg, arg), rule(nullptr), automatic(nullptr), sampler(nullptr), nodes(nullptr),
-    state(nullptr), scheme(nullptr), steps(nullptr), damping(nullptr), guard(nullptr),
-    others(nullptr), work(nullptr)
+    Fix(lmp, narg, arg), rule(nullptr), auto_quadrature(nullptr), sampler(nullptr),
+    node_sampler(nullptr), state(nullptr), two_step(nullptr), step_control(nullptr),
+    damping(nullptr), guard(nullptr), others(nullptr), work(nullptr)
 {
   opts = new PEJump::Options;
   evals = new PEJump::Evaluations;
@@ -98,7 +98,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
 
   rule = new Quadrature(static_cast<Quadrature::Family>(opts->family), opts->npoints);
   sampler = new ForceSampler(lmp);
-  nodes = new NodeSampler(lmp, sampler);
+  node_sampler = new NodeSampler(lmp, sampler);
   guard = new StabilityGuard(lmp);
   others = new OtherFixes(lmp, this);
   work = new PEJump::WorkForces(lmp, 2);
@@ -106,16 +106,16 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   if (opts->auto_tol > 0.0) {
     if (opts->sample_mask != ForceSampler::ALL)
       error->all(FLERR, "Fix {} quadrature auto samples all force contributions", style);
-    automatic = new PEJump::AutoQuadrature(lmp, id, opts->auto_tol);
+    auto_quadrature = new PEJump::AutoQuadrature(lmp, id, opts->auto_tol);
   }
 
   // the per-atom state; step control adds the force history it needs
   state = new AtomState(lmp);
-  scheme = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
+  two_step = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
   const bool compensate = (opts->compensate < 0) ? (opts->adapt_eps > 0.0)
                                                  : (opts->compensate != 0);
-  steps = new StepControl(lmp, *state, opts->adapt_eps, opts->adapt_dtmin, opts->adapt_dtmax,
-                          compensate);
+  step_control = new StepControl(lmp, *state, opts->adapt_eps, opts->adapt_dtmin, opts->adapt_dtmax,
+                                 compensate);
   damping = new PEJump::ParasiticDamping(*state);
 
   time_integrate = 1;
@@ -139,7 +139,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
   *evals = {};
 
   for (int i = 0; i < atom->nlocal; i++) FixPEJump::set_arrays(i);
-  scheme->fresh = born = 0;
+  two_step->fresh = born = 0;
   advance_pending = 0.0;
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -153,7 +153,7 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
 
 void FixPEJump::post_constructor()
 {
-  if (automatic) automatic->create_compute();
+  if (auto_quadrature) auto_quadrature->create_compute();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -168,15 +168,15 @@ FixPEJump::~FixPEJump()
   delete opts;
   delete work;
   delete[] extlist;
-  delete steps;
-  delete scheme;
+  delete step_control;
+  delete two_step;
   delete state;
   delete others;
   delete damping;
   delete guard;
-  delete nodes;
+  delete node_sampler;
   delete sampler;
-  delete automatic;
+  delete auto_quadrature;
   delete rule;
 }
 
@@ -185,7 +185,7 @@ FixPEJump::~FixPEJump()
 int FixPEJump::setmask()
 {
   int mask = INITIAL_INTEGRATE | POST_NEIGHBOR | PRE_REVERSE | FINAL_INTEGRATE;
-  if (steps->adapts()) mask |= END_OF_STEP;
+  if (step_control->adapts()) mask |= END_OF_STEP;
   return mask;
 }
 
@@ -216,10 +216,10 @@ void FixPEJump::refuse_atoms_outside_include_group() const
 
 void FixPEJump::init()
 {
-  scheme->init(style);
+  two_step->init(style);
   guard->refuse_zero_skin(style, rule->only_end_nodes(), "quadrature " + rule->name());
   refuse_atoms_outside_include_group();
-  if (steps->adapts()) refuse_step_counters();
+  if (step_control->adapts()) refuse_step_counters();
 
   others->sort(*sampler);
   sampler->refuse_velocity_forces(style, rule->name(), rule->only_end_nodes());
@@ -233,7 +233,7 @@ void FixPEJump::init()
 
   const int present = sampler->present();
   const bool centre = split_primary() && (rule->family() == Quadrature::LEGENDRE) &&
-      (rule->points() % 2 == 0) && !automatic;
+      (rule->points() % 2 == 0) && !auto_quadrature;
   if (centre != (rule->size() != rule->points())) {
     auto *other = new Quadrature(rule->family(), rule->points(), centre);
     delete rule;
@@ -248,7 +248,7 @@ void FixPEJump::init()
                 others->thermostat_forces() > 0);
   maxexchange = state->values();    // (damping may have added its fields)
   check_others_for_rule();
-  if (automatic) automatic->check_compute(style);
+  if (auto_quadrature) auto_quadrature->check_compute(style);
   if (present && !(opts->sample_mask & present) && (comm->me == 0))
     error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
 }
@@ -288,7 +288,7 @@ void FixPEJump::check_others_for_rule() const
   others->warn_energy_inside_step(rule->name(), primary_at_end);
   others->warn_langevin_inside_step(rule->name(), primary_at_end);
   if (!primary_at_end)
-    nodes->refuse_step_end_side_effects(
+    node_sampler->refuse_step_end_side_effects(
         style,
         fmt::format("with quadrature {} this fix evaluates the force field at the "
                     "primary node inside the step and again at the step end on steps "
@@ -303,7 +303,7 @@ void FixPEJump::check_others_for_rule() const
 
 void FixPEJump::min_setup(int /*vflag*/)
 {
-  scheme->atoms_minimized();
+  two_step->atoms_minimized();
 }
 
 /* ----------------------------------------------------------------------
@@ -326,14 +326,15 @@ void FixPEJump::setup(int /*vflag*/)
   evals->step = 0.0;
   // a new time step between runs: the jumps fit the old one (restart), unless
   // they are to be carried over (compensate given, or adapt)
-  scheme->agree_on_started(group_atoms(), style, (opts->compensate < 0) && !steps->adapts(),
-                           nodes->tallied(true));
-  nodes->ask_energy_at(update->laststep);    // for the next run to compare
-  const int change = scheme->has_started() ? scheme->velocity_change(group_atoms(), true) : 0;
-  const double pe = steps->adapts() ? potential_now() : 0.0;
-  if ((!scheme->has_started() || (change == 2)) && !scheme->reading_snapshots())
-    steps->first_step(style, group_atoms(), atom->f, pe);
-  if (!scheme->has_started())
+  two_step->agree_on_started(group_atoms(), style,
+                             (opts->compensate < 0) && !step_control->adapts(),
+                             node_sampler->tallied(true));
+  node_sampler->ask_energy_at(update->laststep);    // for the next run to compare
+  const int change = two_step->has_started() ? two_step->velocity_change(group_atoms(), true) : 0;
+  const double pe = step_control->adapts() ? potential_now() : 0.0;
+  if ((!two_step->has_started() || (change == 2)) && !two_step->reading_snapshots())
+    step_control->first_step(style, group_atoms(), atom->f, pe);
+  if (!two_step->has_started())
     start_scheme(nullptr, true);
   else if (change == 2)
     start_scheme("velocities were changed since the last run: restarting the two-step scheme "
@@ -344,11 +345,12 @@ void FixPEJump::setup(int /*vflag*/)
   if ((change == 1) && (comm->me == 0))
     utils::logmesg(lmp, "Fix {}: all velocities were reversed: continuing backwards in time\n",
                    style);
-  scheme->fresh = 0;
+  two_step->fresh = 0;
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
-  if (steps->adapts()) steps->start_run(style, pe + scheme->energies(group_atoms())[0]);
-  if (damping->automatic_on() && !scheme->reading_snapshots()) note_damping(false);
-  if (automatic) automatic->start_run(*nodes, opts->sample_mask);
+  if (step_control->adapts())
+    step_control->start_run(style, pe + two_step->energies(group_atoms())[0]);
+  if (damping->automatic_on() && !two_step->reading_snapshots()) note_damping(false);
+  if (auto_quadrature) auto_quadrature->start_run(*node_sampler, opts->sample_mask);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -365,7 +367,7 @@ void FixPEJump::setup_pre_reverse(int eflag, int vflag)
 
 void FixPEJump::initial_integrate(int /*vflag*/)
 {
-  if (scheme->awaits_setup() && scheme->check_run_without_setup(style, group_atoms(), false))
+  if (two_step->awaits_setup() && two_step->check_run_without_setup(style, group_atoms(), false))
     next_reneighbor = update->ntimestep;
   begin_step();
   // the Verlet loop's forces are taken at the primary node: a force that
@@ -403,10 +405,10 @@ void FixPEJump::begin_step()
     return;
   }
   open_steps();
-  if (steps->keeps_history()) {
+  if (step_control->keeps_history()) {
     grow_work();
-    if (steps->compensate(h_step, group_atoms(), atom->v, scheme->jump(), fsum())) {
-      scheme->forget_energies();
+    if (step_control->compensate(h_step, group_atoms(), atom->v, two_step->jump(), fsum())) {
+      two_step->forget_energies();
       guard->forget_stats();
     }
   }
@@ -426,7 +428,7 @@ void FixPEJump::begin_step()
 void FixPEJump::node_impulses()
 {
   if (!watch(OtherFixes::BETWEEN_STEPS)) return;
-  if (!scheme->any_changed(group_atoms())) return;
+  if (!two_step->any_changed(group_atoms())) return;
   damping->impulse_here();
   // the speeds taken at the end of the last step no longer bound the
   // excursion of this step's nodes
@@ -440,15 +442,15 @@ void FixPEJump::node_impulses()
 
 void FixPEJump::open_steps()
 {
-  scheme->open(group_atoms(), false);
+  two_step->open(group_atoms(), false);
   if (!(split_primary() && rule->has_end_nodes())) return;
   double **v = atom->v;
   double **f = atom->f;
-  double **fstart = scheme->fstart();
+  double **fstart = two_step->fstart();
   const double dth = 0.5 * h_step * force->ftm2v;
   for_atoms([&](int i) {
     if (std::isnan(fstart[i][0])) return;
-    const double dtfm = dth * scheme->inverse_mass_of(i);
+    const double dtfm = dth * two_step->inverse_mass_of(i);
     for (int k = 0; k < 3; k++) v[i][k] += dtfm * (f[i][k] - fstart[i][k]);
   });
   guard->forget_stats();
@@ -465,7 +467,7 @@ bool FixPEJump::watch(int when) const
 
 PEJump::FreeFlight FixPEJump::free_flight() const
 {
-  return {atom->v, scheme->jump(), nullptr, before_open != 0};
+  return {atom->v, two_step->jump(), nullptr, before_open != 0};
 }
 
 /* ----------------------------------------------------------------------
@@ -476,7 +478,7 @@ PEJump::FreeFlight FixPEJump::free_flight() const
 
 bool FixPEJump::open_while_moving() const
 {
-  return !steps->keeps_history() && !(split_primary() && rule->has_end_nodes());
+  return !step_control->keeps_history() && !(split_primary() && rule->has_end_nodes());
 }
 
 /* ----------------------------------------------------------------------
@@ -487,7 +489,7 @@ void FixPEJump::open_and_advance(double t)
 {
   double **x = atom->x;
   double **v = atom->v;
-  double **jump = scheme->jump();
+  double **jump = two_step->jump();
   const double now = advance_now(t);
   for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) {
@@ -578,7 +580,7 @@ AtomSet FixPEJump::group_atoms() const
 void FixPEJump::check_lists()
 {
   const int first = rule->first_sampled();
-  const double c_hi = nodes->step_end_evaluated() ? 1.0 : rule->node.back();
+  const double c_hi = node_sampler->step_end_evaluated() ? 1.0 : rule->node.back();
   check_excursion(rule->node[first] * h_step, c_hi * h_step);
 }
 
@@ -589,7 +591,7 @@ void FixPEJump::check_lists()
 
 void FixPEJump::pre_reverse(int eflag, int vflag)
 {
-  nodes->note_step_flags(eflag, vflag);
+  node_sampler->note_step_flags(eflag, vflag);
   if (!use_copy()) return;
   grow_work();
   const int nall = atom->nlocal + atom->nghost;
@@ -611,18 +613,18 @@ void FixPEJump::final_integrate()
 
   // with a single node, evaluated by the Verlet loop with nothing else to
   // separate, the forces there are the quadrature average itself
-  const bool direct = (rule->size() == 1) && !split_primary() && !steps->adapts();
+  const bool direct = (rule->size() == 1) && !split_primary() && !step_control->adapts();
   // the nodes are sampled at their own times (from the primary node's)
-  nodes->time_follows_nodes(!others->integrate_others());
+  node_sampler->time_follows_nodes(!others->integrate_others());
   if (!direct) quadrature_sum();
-  nodes->time_follows_nodes(false);
+  node_sampler->time_follows_nodes(false);
   update->atime = end_time;
   double **favg = direct ? atom->f : fsum();
 
   const double rest = (1.0 - rule->node[rule->primary()]) * h_step;
   if (born) {
     // (a Lobatto rule's sampled force at the end node is its next start node)
-    double **fp = rule->has_end_nodes() ? scheme->fstart()
+    double **fp = rule->has_end_nodes() ? two_step->fstart()
                                         : (split_primary() ? fsample() : atom->f);
     start_new_atoms(fp, rest);
     born = 0;
@@ -630,8 +632,8 @@ void FixPEJump::final_integrate()
   double mag[2] = {0.0, 0.0};
   opened_ahead = may_open_ahead();
   if (opened_ahead)
-    scheme->jump_loop(group_atoms(), favg,
-                      {h_step, rest, rule->node[rule->primary()] * update->dt, false}, mag);
+    two_step->jump_loop(group_atoms(), favg,
+                        {h_step, rest, rule->node[rule->primary()] * update->dt, false}, mag);
   else
     finish_step(favg, rest, mag);
   guard->set_stats(mag[0], mag[1]);
@@ -640,12 +642,12 @@ void FixPEJump::final_integrate()
   if (rest != 0.0)
     tally_at_node();
   else
-    nodes->ghosts_with_owned(others->step_observed());
+    node_sampler->ghosts_with_owned(others->step_observed());
   if (others->integrate_others() && (neighbor->ago == 0) && !rule->only_end_nodes())
     others->refuse_interactions(rule->name().c_str());
   evals->total += evals->step;
-  scheme->forget_energies();
-  steps->step_done(h_step);
+  two_step->forget_energies();
+  step_control->step_done(h_step);
 }
 
 /* ----------------------------------------------------------------------
@@ -662,11 +664,11 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
   double **x = atom->x;
   double **v = atom->v;
   double **f = atom->f;
-  double **jump = scheme->jump();
+  double **jump = two_step->jump();
   const bool keep_start = rule->has_end_nodes();
-  double **fhist = steps->next_history();
+  double **fhist = step_control->next_history();
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS);
-  double *vsig = fingerprint ? scheme->vsig() : nullptr;
+  double *vsig = fingerprint ? two_step->vsig() : nullptr;
   const double kick = 2.0 * h_step * force->ftm2v;
   // forces not integrated by the rule: an impulse at the centre of the step
   // (position Verlet), or at its end node half now and half at the start of
@@ -677,14 +679,14 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
   // node, centred on it from this step's and the last step's impulses
   const PEJump::ParasiticDamping::Step *damp = damping->step(h_step);
   if (!centre_kick && !end_kick && !fhist) {
-    scheme->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, fingerprint}, mag, damp);
+    two_step->jump_loop(group_atoms(), favg, {h_step, rest, -1.0, fingerprint}, mag, damp);
     return;
   }
   double vv = mag[0], jj = mag[1];
   double **sampled = fsample();
   // per atom in registers (the arrays may alias for all the compiler knows)
   const auto one = [&](int i) {
-    const double dtfm = kick * scheme->inverse_mass_of(i);
+    const double dtfm = kick * two_step->inverse_mass_of(i);
     double vh[3] = {v[i][0], v[i][1], v[i][2]};    // v^{n+1/2}
     double jmp[3] = {jump[i][0], jump[i][1], jump[i][2]};
     double vnew[3];
@@ -720,8 +722,9 @@ void FixPEJump::finish_step(double **favg, double rest, double *mag)
 bool FixPEJump::may_open_ahead() const
 {
   return ((rule->size() == 1) || rule->has_end_nodes()) && !split_primary() &&
-      !steps->keeps_history() && !damping->active() && neighbor->dist_check && !reinit_pending &&
-      !watch(OtherFixes::BETWEEN_STEPS) && !others->step_observed() && !timer->has_timeout();
+      !step_control->keeps_history() && !damping->active() && neighbor->dist_check &&
+      !reinit_pending && !watch(OtherFixes::BETWEEN_STEPS) && !others->step_observed() &&
+      !timer->has_timeout();
 }
 
 /* ----------------------------------------------------------------------
@@ -735,7 +738,7 @@ bool FixPEJump::may_open_ahead() const
 void FixPEJump::tally_at_node()
 {
   evals->step +=
-      nodes->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
+      node_sampler->at_step_end(others->step_observed(), others->integrate_others() ? groupbit : 0);
 }
 
 /* ----------------------------------------------------------------------
@@ -746,16 +749,16 @@ void FixPEJump::tally_at_node()
 void FixPEJump::post_run()
 {
   // the velocities as the run leaves them, for the next run to compare
-  scheme->end_run(group_atoms(), nodes->tallied(true));
+  two_step->end_run(group_atoms(), node_sampler->tallied(true));
 
-  if (automatic) automatic->report(style);
+  if (auto_quadrature) auto_quadrature->report(style);
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJump::end_of_step()
 {
-  if (steps->adapts()) steps->choose_next(group_atoms(), fsum(), scheme->jump());
+  if (step_control->adapts()) step_control->choose_next(group_atoms(), fsum(), two_step->jump());
 }
 
 /* ----------------------------------------------------------------------
@@ -781,7 +784,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 
   // the jump takes the forces that the rule integrates
   const double kick = (opts->init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
-  scheme->start(group_atoms(), split_primary() ? fsample() : atom->f, kick, [&](int) {
+  two_step->start(group_atoms(), split_primary() ? fsample() : atom->f, kick, [&](int) {
     return update->dt;
   });
 
@@ -790,8 +793,8 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 
   reinit_pending = with_start && (opts->init_style == PEJump::Options::KICK) && !split_primary() &&
       sampler->has_projections();
-  scheme->set_started(true);
-  steps->forget();
+  two_step->set_started(true);
+  step_control->forget();
   damping->forget_history();
   guard->forget_stats();
 }
@@ -803,7 +806,7 @@ void FixPEJump::start_scheme(const char *why, bool with_start)
 void FixPEJump::store_start_node()
 {
   primary_sampled_force();
-  double **fstart = scheme->fstart();
+  double **fstart = two_step->fstart();
   for_atoms([&](int i) {
     for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
   });
@@ -824,7 +827,7 @@ void FixPEJump::primary_sampled_force()
   } else if (use_copy()) {
     if (force->newton) comm->reverse_comm(this);
   } else {
-    NodeSampler::Keep keep(*nodes);
+    NodeSampler::Keep keep(*node_sampler);
     sampler->compute(opts->sample_mask, 0, 0);
     if (nlocal) memcpy(&fsample()[0][0], &atom->f[0][0], nbytes);
     evals->step += sampler->fraction(opts->sample_mask);
@@ -840,7 +843,7 @@ void FixPEJump::primary_sampled_force()
 
 void FixPEJump::project_sampled()
 {
-  NodeSampler::Keep keep(*nodes);
+  NodeSampler::Keep keep(*node_sampler);
   const size_t nbytes = 3 * sizeof(double) * atom->nlocal;
   if (nbytes) memcpy(&atom->f[0][0], &fsample()[0][0], nbytes);
   sampler->project();
@@ -856,20 +859,20 @@ void FixPEJump::project_sampled()
 void FixPEJump::refresh_start_nodes()
 {
   int any = 0;
-  MPI_Allreduce(&scheme->fresh, &any, 1, MPI_INT, MPI_MAX, world);
+  MPI_Allreduce(&two_step->fresh, &any, 1, MPI_INT, MPI_MAX, world);
   if (!any || !rule->reuses_start_node()) return;
 
   // the new atoms (start node still unknown) also get the initial kick
   AtomList fresh;
-  double **fstart = scheme->fstart();
+  double **fstart = two_step->fstart();
   for_atoms([&](int i) {
     if (std::isnan(fstart[i][0])) fresh.push_back(i);
   });
   store_start_node();
   if (opts->init_style != PEJump::Options::KICK) return;
-  double **jump = scheme->jump();
+  double **jump = two_step->jump();
   for (const int i : fresh) {
-    const double dtfm = force->ftm2v * update->dt * scheme->inverse_mass_of(i);
+    const double dtfm = force->ftm2v * update->dt * two_step->inverse_mass_of(i);
     for (int k = 0; k < 3; k++) jump[i][k] = dtfm * fstart[i][k];
   }
 }
@@ -882,14 +885,14 @@ void FixPEJump::refresh_start_nodes()
 
 void FixPEJump::quadrature_sum()
 {
-  if (automatic) {
+  if (auto_quadrature) {
     auto_quadrature_sum();
     return;
   }
 
   const int p = rule->primary();
   const int reuse_start = rule->reuses_start_node();
-  double **fstart = scheme->fstart();
+  double **fstart = two_step->fstart();
 
   if (split_primary()) primary_sampled_force();
 
@@ -910,10 +913,10 @@ void FixPEJump::quadrature_sum()
   // or if something looks at it (it is then fstart again)
   const bool keep_forces = split_primary() || !reuse_start;
   const int evaluated =
-      nodes->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
-                       group_atoms(), opts->sample_mask, fsum(), nullptr, keep_forces);
+      node_sampler->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
+                              group_atoms(), opts->sample_mask, fsum(), nullptr, keep_forces);
   evals->step += evaluated * sampler->fraction(opts->sample_mask);
-  if (!keep_forces && atom->nlocal && (others->step_observed() || nodes->tally_step()))
+  if (!keep_forces && atom->nlocal && (others->step_observed() || node_sampler->tally_step()))
     memcpy(&atom->f[0][0], &fstart[0][0], 3 * sizeof(double) * atom->nlocal);
 }
 
@@ -925,14 +928,14 @@ void FixPEJump::quadrature_sum()
 
 void FixPEJump::auto_quadrature_sum()
 {
-  double **fstart = scheme->fstart();
+  double **fstart = two_step->fstart();
   primary_sampled_force();    // F(q^{n+1}) into fsample()
   for_atoms([&](int i) {
     if (std::isnan(fstart[i][0]))
       for (int k = 0; k < 3; k++) fstart[i][k] = fsample()[i][k];
   });
-  const int evaluated = automatic->sum(*nodes, opts->sample_mask, group_atoms(), free_flight(),
-                                       h_step, fstart, fsample(), fsum());
+  const int evaluated = auto_quadrature->sum(*node_sampler, opts->sample_mask, group_atoms(),
+                                             free_flight(), h_step, fstart, fsample(), fsum());
   evals->step += evaluated * sampler->fraction(opts->sample_mask);
   // the end node is the start node of the next step
   for_atoms([&](int i) {
@@ -973,7 +976,7 @@ void FixPEJump::check_excursion(double lo, double hi)
       guard->forget_reach();
   } else {
     const StabilityGuard::Nodes at{h_step, lo, hi};
-    guard->measure(group_atoms(), free_flight(), scheme->jump(), xhold, at, local);
+    guard->measure(group_atoms(), free_flight(), two_step->jump(), xhold, at, local);
   }
   finish_check(local);
 }
@@ -990,7 +993,7 @@ void FixPEJump::finish_check(const double *local)
   const bool rebuild = guard->conclude(
       style, local, impulse,
       [&]() {
-        return scheme->energies(group_atoms());
+        return two_step->energies(group_atoms());
       },
       [&]() {
         return instability_advice();
@@ -1019,17 +1022,18 @@ std::string FixPEJump::instability_advice() const
   // taken as an impulse beside the jump; the rules with interior nodes can
   // grow on many of them, lobatto 2 takes them as velocity Verlet does
   const std::string reversing = rule->only_end_nodes() ? std::string() : others->reversing_fixes();
-  return fmt::format(
-      "The time step {} is beyond the stability limit of the fastest motion (for "
-      "masses m joined by springs of stiffness k in a chain, dt < sqrt(m/k); "
-      "bond_style harmonic has k = 2K): {}{}",
-      h_step,
-      steps->adapts() ? "lower the adapt dtmin or eps" : "reduce it, or use the adapt keyword",
-      reversing.empty() ? ""
-                        : fmt::format(". Velocities reversed by {} can also make the scheme "
-                                      "grow with this rule: use quadrature lobatto 2, which "
-                                      "takes them as fix nve does",
-                                      reversing));
+  return fmt::format("The time step {} is beyond the stability limit of the fastest motion (for "
+                     "masses m joined by springs of stiffness k in a chain, dt < sqrt(m/k); "
+                     "bond_style harmonic has k = 2K): {}{}",
+                     h_step,
+                     step_control->adapts() ? "lower the adapt dtmin or eps"
+                                            : "reduce it, or use the adapt keyword",
+                     reversing.empty()
+                         ? ""
+                         : fmt::format(". Velocities reversed by {} can also make the scheme "
+                                       "grow with this rule: use quadrature lobatto 2, which "
+                                       "takes them as fix nve does",
+                                       reversing));
 }
 
 /* ----------------------------------------------------------------------
@@ -1039,7 +1043,7 @@ std::string FixPEJump::instability_advice() const
 
 void FixPEJump::tell_largest_jump() const
 {
-  double **jump = scheme->jump();
+  double **jump = two_step->jump();
   struct {
     double value;
     int rank;
@@ -1077,7 +1081,7 @@ void FixPEJump::tell_largest_jump() const
 
 double FixPEJump::potential_now()
 {
-  double pe = nodes->potential(ForceSampler::ALL);
+  double pe = node_sampler->potential(ForceSampler::ALL);
   if (force->pair && force->pair->tail_flag) {
     const double volume = domain->xprd * domain->yprd * domain->zprd;
     pe += force->pair->etail / volume;
@@ -1099,7 +1103,7 @@ double FixPEJump::compute_vector(int n)
   switch (n) {
     case 0:
     case 1:
-      return scheme->energies(group_atoms())[n];
+      return two_step->energies(group_atoms())[n];
     case 2:
       return update->dt;
     case 3:
@@ -1132,8 +1136,9 @@ double **FixPEJump::fsample() const
 void FixPEJump::grow_work()
 {
   const int need = use_copy() ? atom->nlocal + atom->nghost : atom->nlocal;
-  const bool sum = (rule->size() > 1) || split_primary() || steps->keeps_history() || automatic;
-  const bool sample = split_primary() || rule->has_end_nodes() || automatic;
+  const bool sum = (rule->size() > 1) || split_primary() || step_control->keeps_history() ||
+      auto_quadrature;
+  const bool sample = split_primary() || rule->has_end_nodes() || auto_quadrature;
   work->ensure(need, (sum ? 1 << SUM : 0) | (sample ? 1 << SAMPLE : 0));
 }
 
@@ -1162,9 +1167,9 @@ void FixPEJump::copy_arrays(int i, int j, int /*delflag*/)
 void FixPEJump::set_arrays(int i)
 {
   state->reset(i);
-  scheme->mark(i);
-  for (int k = 0; k < 3; k++) scheme->jump()[i][k] = std::numeric_limits<double>::quiet_NaN();
-  scheme->fresh = 1;
+  two_step->mark(i);
+  for (int k = 0; k < 3; k++) two_step->jump()[i][k] = std::numeric_limits<double>::quiet_NaN();
+  two_step->fresh = 1;
   born = 1;
 }
 
@@ -1181,11 +1186,11 @@ void FixPEJump::start_new_atoms(double **fp, double rest)
 {
   double **x = atom->x;
   double **v = atom->v;
-  double **jump = scheme->jump();
+  double **jump = two_step->jump();
   const double kick = h_step * force->ftm2v;
   for_atoms([&](int i) {
     if (!std::isnan(jump[i][0])) return;
-    const double dtfm = kick * scheme->inverse_mass_of(i);
+    const double dtfm = kick * two_step->inverse_mass_of(i);
     for (int k = 0; k < 3; k++) {
       jump[i][k] = dtfm * fp[i][k];
       x[i][k] -= rest * v[i][k];
@@ -1206,7 +1211,7 @@ int FixPEJump::unpack_exchange(int nlocal, double *buf)
 {
   const int n = state->unpack(nlocal, buf);
   // (an atom created in this step may move to another rank before its start)
-  if (std::isnan(scheme->jump()[nlocal][0])) born = 1;
+  if (std::isnan(two_step->jump()[nlocal][0])) born = 1;
   return n;
 }
 
@@ -1229,14 +1234,15 @@ void FixPEJump::write_restart(FILE *fp)
 
 void FixPEJump::global_state(double *list) const
 {
-  list[HEAD] = (scheme->has_started() ? HEAD_STARTED : 0) + (damping->kicked() ? HEAD_KICKED : 0) +
-      (damping->has_history() ? HEAD_DAMPED : 0) + (damping->allocated() ? HEAD_DAMP_FIELDS : 0);
+  list[HEAD] = (two_step->has_started() ? HEAD_STARTED : 0) +
+      (damping->kicked() ? HEAD_KICKED : 0) + (damping->has_history() ? HEAD_DAMPED : 0) +
+      (damping->allocated() ? HEAD_DAMP_FIELDS : 0);
   list[FORMAT] = RESTART_FORMAT;
   list[FAMILY] = rule->family();
   list[POINTS] = rule->points();
   list[EVALS_TOTAL] = evals->total;
-  steps->save(&list[STEPS]);
-  scheme->save_census(&list[CENSUS]);
+  step_control->save(&list[STEPS]);
+  two_step->save_census(&list[CENSUS]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1249,13 +1255,13 @@ void FixPEJump::restart(char *buf)
   const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
       (static_cast<int>(list[POINTS]) == rule->points());
   const int head = static_cast<int>(list[HEAD]);
-  scheme->set_started(((head & HEAD_STARTED) != 0) && same_rule);
+  two_step->set_started(((head & HEAD_STARTED) != 0) && same_rule);
   evals->total = list[EVALS_TOTAL];
-  steps->load(&list[STEPS]);
-  scheme->load_census(&list[CENSUS]);
+  step_control->load(&list[STEPS]);
+  two_step->load_census(&list[CENSUS]);
   damping->set_kicked((head & HEAD_KICKED) != 0);
   if (head & HEAD_DAMP_FIELDS) damping->allocate();
-  damping->set_history(((head & HEAD_DAMPED) != 0) && scheme->has_started());
+  damping->set_history(((head & HEAD_DAMPED) != 0) && two_step->has_started());
   if (!same_rule && (comm->me == 0))
     utils::logmesg(lmp,
                    "Fix {}: quadrature differs from the restart file: the two-step scheme "
@@ -1268,7 +1274,7 @@ void FixPEJump::restart(char *buf)
 int FixPEJump::pack_restart(int i, double *buf)
 {
   // written during a run: the velocities are the fix's own
-  if (update->whichflag) scheme->mark(i);
+  if (update->whichflag) two_step->mark(i);
   return state->pack_restart(i, buf);
 }
 
@@ -1277,7 +1283,7 @@ int FixPEJump::pack_restart(int i, double *buf)
 void FixPEJump::unpack_restart(int nlocal, int nth)
 {
   // a misfit is told by TwoStep::agree_on_started()
-  if (!state->unpack_restart(nlocal, nth)) scheme->restart_data_unfit();
+  if (!state->unpack_restart(nlocal, nth)) two_step->restart_data_unfit();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1327,6 +1333,6 @@ void FixPEJump::unpack_reverse_comm(int n, int *list, double *buf)
 
 double FixPEJump::memory_usage()
 {
-  return state->memory_usage() + nodes->memory_usage() +
-      (automatic ? automatic->memory_usage() : 0.0) + work->memory_usage();
+  return state->memory_usage() + node_sampler->memory_usage() +
+      (auto_quadrature ? auto_quadrature->memory_usage() : 0.0) + work->memory_usage();
 }

@@ -89,12 +89,12 @@ class FixPEJump : public Fix {
   // other fixes do, and the work arrays
   PEJump::Options *opts;
   PEJump::Quadrature *rule;
-  PEJump::AutoQuadrature *automatic;    // quadrature auto, or nullptr
+  PEJump::AutoQuadrature *auto_quadrature;    // quadrature auto, or nullptr
   PEJump::ForceSampler *sampler;
-  PEJump::NodeSampler *nodes;
+  PEJump::NodeSampler *node_sampler;
   PEJump::AtomState *state;
-  PEJump::TwoStep *scheme;
-  PEJump::StepControl *steps;
+  PEJump::TwoStep *two_step;
+  PEJump::StepControl *step_control;
   PEJump::ParasiticDamping *damping;
   PEJump::StabilityGuard *guard;
   PEJump::OtherFixes *others;

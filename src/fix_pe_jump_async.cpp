@@ -109,9 +109,9 @@ static constexpr int FINE_CLOCK = 0, COARSE_CLOCK = 1;
 /* ---------------------------------------------------------------------- */
 
 FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
-    Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), nodes(nullptr), state(nullptr),
-    scheme(nullptr), guard(nullptr), damping(nullptr), ghosts(nullptr), others(nullptr),
-    tally(nullptr), split(nullptr), clocks(nullptr), assign(nullptr), classes(nullptr),
+    Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), node_sampler(nullptr), state(nullptr),
+    two_step(nullptr), guard(nullptr), damping(nullptr), ghosts(nullptr), others(nullptr),
+    tally(nullptr), split(nullptr), clocks(nullptr), clock_assignment(nullptr), classes(nullptr),
     work(nullptr), changes_seen(0), fine_speed2(0.0), fine_change(0.0), reverse_copy(false),
     builds_inside(0), lists_forced(false), end_time(0.0), impulse_at_start(false),
     impulse_pending(false)
@@ -133,24 +133,24 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
 
   rule = new Quadrature(static_cast<Quadrature::Family>(opts->family), opts->npoints);
   sampler = new ForceSampler(lmp);
-  nodes = new NodeSampler(lmp, sampler);
+  node_sampler = new NodeSampler(lmp, sampler);
   guard = new StabilityGuard(lmp);
   others = new OtherFixes(lmp, this);
   tally = new PEJump::SplitTally(lmp);
   work = new PEJump::WorkForces(lmp, 2);
   state = new AtomState(lmp);
-  scheme = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
-  FACC = state->add("facc", 3, 0.0);
-  FSTART_COARSE = rule->reuses_start_node() ? state->add("fstart_coarse", 3, 0.0) : -1;
-  END_IMPULSE = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
-  FCOARSE = state->add("fcoarse", 3, 0.0);
+  two_step = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
+  facc_field = state->add("facc", 3, 0.0);
+  fstart_coarse_field = rule->reuses_start_node() ? state->add("fstart_coarse", 3, 0.0) : -1;
+  end_impulse_field = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
+  fcoarse_field = state->add("fcoarse", 3, 0.0);
   damping = new PEJump::ParasiticDamping(*state);
   ghosts = new PEJump::MovingGhosts(lmp, this);
-  assign = new ClockAssignment(lmp, this, arg[4], {opts->buffer_layers, opts->buffer_reach},
-                               opts->fast_auto > 0.0);
+  clock_assignment = new ClockAssignment(
+      lmp, this, arg[4], {opts->buffer_layers, opts->buffer_reach}, opts->fast_auto > 0.0);
   classes = new PEJump::ClockClasses(lmp, *state);
   clocks = new AsyncClocks(nfine);
-  split = new InteractionSplit(lmp, groupbit, assign->clock_bit());
+  split = new InteractionSplit(lmp, groupbit, clock_assignment->clock_bit());
 
   time_integrate = 1;
   scalar_flag = 1;
@@ -184,23 +184,23 @@ FixPEJumpAsync::~FixPEJumpAsync()
     atom->delete_callback(id, Atom::GROW);
     atom->delete_callback(id, Atom::RESTART);
   }
-  if (assign) assign->delete_clock_group();
+  if (clock_assignment) clock_assignment->delete_clock_group();
   delete evals;
   delete opts;
   delete[] extlist;
   delete split;
   delete clocks;
   delete classes;
-  delete assign;
+  delete clock_assignment;
   delete ghosts;
   delete damping;
-  delete scheme;
+  delete two_step;
   delete state;
   delete work;
   delete tally;
   delete others;
   delete guard;
-  delete nodes;
+  delete node_sampler;
   delete sampler;
   delete rule;
 }
@@ -209,13 +209,13 @@ FixPEJumpAsync::~FixPEJumpAsync()
 
 void FixPEJumpAsync::init()
 {
-  scheme->init(style);
+  two_step->init(style);
   guard->refuse_zero_skin(style, false, "the coarse clock");
   others->sort(*sampler);
   sampler->refuse_velocity_forces(style, rule->name(), false);
   refuse_unsplittable();
   refuse_other_fixes();
-  nodes->refuse_step_end_side_effects(
+  node_sampler->refuse_step_end_side_effects(
       style,
       "on steps that tally energy or virial or dump forces this fix evaluates every "
       "interaction at the end of the coarse step");
@@ -232,8 +232,8 @@ void FixPEJumpAsync::init()
   others->warn_energy_inside_step(rule->name(), primary_at_end);
   others->warn_langevin_inside_step(rule->name(), primary_at_end);
   split->start_run();
-  assign->find_groups();
-  split->set_fine_bit(assign->clock_bit());
+  clock_assignment->find_groups();
+  split->set_fine_bit(clock_assignment->clock_bit());
   // thermostats drive the parasitic mode on both clocks (see fix pe_jump;
   // auto: over AUTO_STEPS coarse steps)
   damping->init(opts->damp_time, update->dt, (others->thermostats() > 0) && !rule->only_end_nodes(),
@@ -249,9 +249,9 @@ void FixPEJumpAsync::init()
 void FixPEJumpAsync::sort_by_clock()
 {
   split->build();
-  assign->find_slow(*split);
-  assign->find_moving(*split);
-  if (ghosts->usable()) ghosts->mark(assign->moving());
+  clock_assignment->find_slow(*split);
+  clock_assignment->find_moving(*split);
+  if (ghosts->usable()) ghosts->mark(clock_assignment->moving());
 }
 
 /* ----------------------------------------------------------------------
@@ -264,9 +264,9 @@ void FixPEJumpAsync::post_neighbor()
   sort_by_clock();
   // a slow atom outside fine interactions has no fine force: a Lobatto
   // start node of its fine steps, should it join one, is zero
-  double **fstart = scheme->fstart();
+  double **fstart = two_step->fstart();
   if (fstart)
-    for (const int i : assign->slow_held)
+    for (const int i : clock_assignment->slow_held)
       for (int k = 0; k < 3; k++) fstart[i][k] = 0.0;
 }
 
@@ -282,20 +282,20 @@ void FixPEJumpAsync::node_impulses()
 {
   // (a pass over the atoms, made only while damp auto waits for a change)
   if (damping->awaits_impulse() && watch(OtherFixes::BETWEEN_STEPS) &&
-      scheme->any_changed(group_atoms()))
+      two_step->any_changed(group_atoms()))
     damping->impulse_here();
   // (a pass over the atoms only if an impulse waits: other fixes added
   // forces at the last coarse node, or a restart file may carry one)
-  if ((END_IMPULSE < 0) || !impulse_pending) return;
+  if ((end_impulse_field < 0) || !impulse_pending) return;
   double **v = atom->v;
-  double **pending = state->vec(END_IMPULSE);
+  double **pending = state->vec(end_impulse_field);
   if (impulse_at_start) {
     // (the first step of a new start: see start_scheme())
     double **f = atom->f;
     const double kick = 0.5 * update->dt * force->ftm2v;
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++)
-        pending[i][k] = kick * scheme->inverse_mass_of(i) * (f[i][k] + pending[i][k]);
+        pending[i][k] = kick * two_step->inverse_mass_of(i) * (f[i][k] + pending[i][k]);
     impulse_at_start = false;
   }
   group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
@@ -313,42 +313,43 @@ void FixPEJumpAsync::node_impulses()
 
 PEJump::FreeFlight FixPEJumpAsync::free_flight() const
 {
-  return {atom->v, scheme->jump(), nullptr};
+  return {atom->v, two_step->jump(), nullptr};
 }
 
 /* ---------------------------------------------------------------------- */
 
 void FixPEJumpAsync::setup(int /*vflag*/)
 {
-  scheme->agree_on_started(group_atoms(), style, opts->compensate < 0, nodes->tallied(true));
+  two_step->agree_on_started(group_atoms(), style, opts->compensate < 0,
+                             node_sampler->tallied(true));
   // the buffer is assigned when the scheme starts, or again if the restart
   // file was written with other buffer layers
   state->ensure(atom->nlocal);
-  if (assign->assign_buffer(scheme->has_started(), *split)) split->invalidate();
+  if (clock_assignment->assign_buffer(two_step->has_started(), *split)) split->invalidate();
   // a run with "pre no" keeps the lists of the previous run: split them if
   // this fix has not seen them yet
   if (!split->up_to_date()) post_neighbor();
   refuse_pair_misfit();
-  scheme->fresh = 0;
+  two_step->fresh = 0;
   changes_seen = 0;
-  assign->warn_if_made_static();
+  clock_assignment->warn_if_made_static();
   check_clocks();
 
   grow_work();
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
                    !domain->box_change);
   evals->step = 0.0;
-  if (!scheme->has_started())
+  if (!two_step->has_started())
     start_scheme(nullptr, true);
   else
     continue_scheme();
   // the next run compares the energy of the run's end
-  nodes->ask_energy_at(update->laststep);
+  node_sampler->ask_energy_at(update->laststep);
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   slow_magnitudes();
-  classes->label(*split, *assign, groupbit);
+  classes->label(*split, *clock_assignment, groupbit);
   log_steps();
-  if (damping->automatic_on() && !scheme->reading_snapshots()) note_damping(false);
+  if (damping->automatic_on() && !two_step->reading_snapshots()) note_damping(false);
 }
 
 /* ----------------------------------------------------------------------
@@ -357,7 +358,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
 
 void FixPEJumpAsync::log_steps() const
 {
-  if ((comm->me != 0) || scheme->reading_snapshots()) return;
+  if ((comm->me != 0) || two_step->reading_snapshots()) return;
   utils::logmesg(lmp,
                  "Fix {}: coarse step h_S = {:.8g} (the time step), fine step h_F = h_S/K = "
                  "{:.8g} (K = {})\n",
@@ -371,7 +372,7 @@ void FixPEJumpAsync::log_steps() const
 
 void FixPEJumpAsync::continue_scheme()
 {
-  const int change = scheme->velocity_change(group_atoms(), true);
+  const int change = two_step->velocity_change(group_atoms(), true);
   if (change == 2)
     start_scheme("velocities were changed since the last run: restarting the two-step scheme "
                  "from the current positions and velocities",
@@ -407,7 +408,7 @@ void FixPEJumpAsync::refuse_keywords() const
 
 void FixPEJumpAsync::post_constructor()
 {
-  assign->create_clock_group();
+  clock_assignment->create_clock_group();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -574,7 +575,7 @@ void FixPEJumpAsync::refuse_pair_misfit() const
 
 void FixPEJumpAsync::min_setup(int /*vflag*/)
 {
-  scheme->atoms_minimized();
+  two_step->atoms_minimized();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -606,7 +607,7 @@ double FixPEJumpAsync::fine_forces_at_node(double **fnode, const std::vector<int
   MPI_Allreduce(&local, &any, 1, MPI_INT, MPI_MAX, world);
   if (!any) return 0.0;
 
-  NodeSampler::Keep keep(*nodes);
+  NodeSampler::Keep keep(*node_sampler);
   split->activate(InteractionSplit::FINE);
   sampler->compute(ForceSampler::ALL, 0, 0);
   split->restore();
@@ -625,11 +626,11 @@ double FixPEJumpAsync::fine_forces_at_node(double **fnode, const std::vector<int
 void FixPEJumpAsync::store_start_node()
 {
   double **f = atom->f;
-  double **fstart = scheme->fstart();
-  double **fstart_coarse = state->vec(FSTART_COARSE);
+  double **fstart = two_step->fstart();
+  double **fstart_coarse = state->vec(fstart_coarse_field);
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  NodeSampler::Keep keep(*nodes);
+  NodeSampler::Keep keep(*node_sampler);
 
   split->activate(InteractionSplit::FINE);
   sampler->compute(ForceSampler::ALL, 0, 0);
@@ -660,7 +661,7 @@ double FixPEJumpAsync::node_cost() const
 void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 {
   split->restore();
-  nodes->note_step_flags(eflag, vflag);
+  node_sampler->note_step_flags(eflag, vflag);
   if (tally->kept() && (eflag & ENERGY_GLOBAL)) tally->add();
   // the coarse interactions' forces, before other fixes add theirs
   if (!others->add_forces()) return;
@@ -679,7 +680,7 @@ void FixPEJumpAsync::pre_reverse(int eflag, int vflag)
 int FixPEJumpAsync::pack_forward_comm(int n, int *list, double *buf, int pbc_flag, int *pbc)
 {
   if (ghosts->active()) return ghosts->pack_forward(n, list, buf, pbc_flag, pbc);
-  return assign->pack_forward(n, list, buf);
+  return clock_assignment->pack_forward(n, list, buf);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -689,7 +690,7 @@ void FixPEJumpAsync::unpack_forward_comm(int n, int first, double *buf)
   if (ghosts->active())
     ghosts->unpack_forward(n, first, buf);
   else
-    assign->unpack_forward(n, first, buf);
+    clock_assignment->unpack_forward(n, first, buf);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -697,7 +698,8 @@ void FixPEJumpAsync::unpack_forward_comm(int n, int first, double *buf)
 int FixPEJumpAsync::pack_reverse_comm(int n, int first, double *buf)
 {
   if (ghosts->active()) return ghosts->pack_reverse(n, first, buf);
-  if (!reverse_copy) return assign->reversing() ? assign->pack_reverse(n, first, buf) : 0;
+  if (!reverse_copy)
+    return clock_assignment->reversing() ? clock_assignment->pack_reverse(n, first, buf) : 0;
   double **copy = work->get(COPY);
   int m = 0;
   for (int i = first; i < first + n; i++)
@@ -714,7 +716,7 @@ void FixPEJumpAsync::unpack_reverse_comm(int n, int *list, double *buf)
     return;
   }
   if (!reverse_copy) {
-    if (assign->reversing()) assign->unpack_reverse(n, list, buf);
+    if (clock_assignment->reversing()) clock_assignment->unpack_reverse(n, list, buf);
     return;
   }
   double **copy = work->get(COPY);
@@ -759,8 +761,8 @@ void FixPEJumpAsync::copy_arrays(int i, int j, int /*delflag*/)
 void FixPEJumpAsync::set_arrays(int i)
 {
   state->reset(i);
-  scheme->mark(i);
-  scheme->fresh = 1;
+  two_step->mark(i);
+  two_step->fresh = 1;
   show_classes();
 }
 
@@ -785,7 +787,7 @@ int FixPEJumpAsync::unpack_exchange(int nlocal, double *buf)
 int FixPEJumpAsync::pack_restart(int i, double *buf)
 {
   // written during a run: the velocities are the fix's own
-  if (update->whichflag) scheme->mark(i);
+  if (update->whichflag) two_step->mark(i);
   return state->pack_restart(i, buf);
 }
 
@@ -794,7 +796,7 @@ int FixPEJumpAsync::pack_restart(int i, double *buf)
 void FixPEJumpAsync::unpack_restart(int nlocal, int nth)
 {
   // a misfit is told by TwoStep::agree_on_started()
-  if (!state->unpack_restart(nlocal, nth)) scheme->restart_data_unfit();
+  if (!state->unpack_restart(nlocal, nth)) two_step->restart_data_unfit();
   show_classes();
 }
 
@@ -816,7 +818,7 @@ int FixPEJumpAsync::maxsize_restart()
 
 double FixPEJumpAsync::memory_usage()
 {
-  return state->memory_usage() + nodes->memory_usage() + work->memory_usage();
+  return state->memory_usage() + node_sampler->memory_usage() + work->memory_usage();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -850,16 +852,16 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
 {
   // (after write_restart or write_data between runs without setup the
   // ghost atoms were rebuilt: the fine steps need lists that fit them)
-  const bool stale = scheme->awaits_setup() &&
-      scheme->check_run_without_setup(style, group_atoms(), assign->changed());
-  if (scheme->has_started()) change_clocks();
+  const bool stale = two_step->awaits_setup() &&
+      two_step->check_run_without_setup(style, group_atoms(), clock_assignment->changed());
+  if (two_step->has_started()) change_clocks();
   node_impulses();
   lists_forced = guard->rebuild_forced();
   begin_coarse_step();
   // the step ends at the primary node (Lobatto rules): the fine and the
   // coarse interactions are evaluated there, and their tallies give the
   // energy output of the step without an evaluation of everything
-  tally->expect(primary_is_last_node() && nodes->energy_only_step());
+  tally->expect(primary_is_last_node() && node_sampler->energy_only_step());
   if (stale) build_lists_now();
   const double primary = rule->node[rule->primary()];
   fine_steps_until(primary * clocks->steps());
@@ -883,7 +885,7 @@ void FixPEJumpAsync::begin_coarse_step()
   evals->step = 0.0;
   fine_speed2 = fine_change = 0.0;
   grow_work();
-  scheme->open(group_atoms(), watch(OtherFixes::INSIDE_STEP));
+  two_step->open(group_atoms(), watch(OtherFixes::INSIDE_STEP));
 }
 
 /* ----------------------------------------------------------------------
@@ -918,7 +920,8 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
 
   // the evaluations clear and keep the forces of the atoms they act on only
   // (and communicate those atoms' ghost copies only)
-  const ForceSampler::Touched moving{0, &assign->moving_atoms, ghosts->usable() ? ghosts : nullptr};
+  const ForceSampler::Touched moving{0, &clock_assignment->moving_atoms,
+                                     ghosts->usable() ? ghosts : nullptr};
   split->activate(InteractionSplit::FINE);
   sampler->only_touch(&moving);
   const bool at_end = tally->expected() && (clocks->done() + 1 == clocks->steps());
@@ -946,7 +949,7 @@ void FixPEJumpAsync::move_moving(double dt)
   if (dt == 0.0) return;
   double **x = atom->x;
   double **v = atom->v;
-  for (const int i : assign->moving_atoms)
+  for (const int i : clock_assignment->moving_atoms)
     for (int k = 0; k < 3; k++) x[i][k] += dt * v[i][k];
 }
 
@@ -961,7 +964,7 @@ void FixPEJumpAsync::hold_until(double t)
   double **x = atom->x;
   double **v = atom->v;
   if (dt != 0.0)
-    for (const int i : assign->slow_held)
+    for (const int i : clock_assignment->slow_held)
       for (int k = 0; k < 3; k++) x[i][k] += dt * v[i][k];
   clocks->hold_at(t);
 }
@@ -990,14 +993,14 @@ bool FixPEJumpAsync::check_fine_nodes(double into)
     local[3] = MAX(guard->jump2(), guard->slow_jump2());
     local[4] = MAX(guard->speed2(), guard->slow_speed2());
     if (xhold)
-      local[0] =
-          guard->excursion_since(group_atoms(&assign->moving_atoms), free_flight(), xhold, lo, hi);
+      local[0] = guard->excursion_since(group_atoms(&clock_assignment->moving_atoms), free_flight(),
+                                        xhold, lo, hi);
     else
       guard->forget_reach();
   } else {
     const StabilityGuard::Nodes at{h, lo, hi};
-    guard->measure(group_atoms(&assign->moving_atoms), free_flight(), scheme->jump(), xhold, at,
-                   local);
+    guard->measure(group_atoms(&clock_assignment->moving_atoms), free_flight(), two_step->jump(),
+                   xhold, at, local);
     // the slow atoms' speeds and jumps as the coarse node left them (the
     // reference of the jumps' growth holds both clocks)
     const double coarse = clocks->coarse_step();
@@ -1022,7 +1025,7 @@ bool FixPEJumpAsync::finish_check(const double *local)
   const bool rebuild = guard->conclude(
       style, local, impulse,
       [&]() {
-        return scheme->energies(group_atoms());
+        return two_step->energies(group_atoms());
       },
       [&]() {
         return instability_advice();
@@ -1114,9 +1117,9 @@ void FixPEJumpAsync::fine_quadrature_sum()
   const int p = rule->primary();
   const bool reuse_start = rule->reuses_start_node();
   double **f = atom->f;
-  double **fstart = scheme->fstart();
+  double **fstart = two_step->fstart();
   double **fsum = work->get(SUM);
-  const AtomList &moving = assign->moving_atoms;
+  const AtomList &moving = clock_assignment->moving_atoms;
 
   const auto begin = rule->start_sum();
   for (const int i : moving) begin(f[i], reuse_start ? fstart[i] : nullptr, fsum[i]);
@@ -1124,8 +1127,8 @@ void FixPEJumpAsync::fine_quadrature_sum()
   if (rule->size() - first <= 1) return;
   const double h = clocks->fine_step();
   const int evaluated =
-      nodes->sum_nodes(*rule, first, p, h, -rule->node[p] * h, free_flight(), group_atoms(&moving),
-                       opts->sample_mask, fsum, nullptr, false);
+      node_sampler->sum_nodes(*rule, first, p, h, -rule->node[p] * h, free_flight(),
+                              group_atoms(&moving), opts->sample_mask, fsum, nullptr, false);
   evals->step += evaluated * node_cost();
 }
 
@@ -1142,17 +1145,17 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double ahead, double *mag)
   const double h = clocks->fine_step();
   double **x = atom->x;
   double **v = atom->v;
-  double **facc = state->vec(FACC);
+  double **facc = state->vec(facc_field);
   const double rest = (1.0 - rule->node[rule->primary()]) * h;
   const bool more = clocks->done() + 1 < clocks->steps();
   const bool fingerprint =
       watch(more ? OtherFixes::INSIDE_STEP : (OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP));
-  scheme->jump_loop(group_atoms(&assign->fast_atoms), favg,
-                    {h, rest, more ? MAX(ahead, 0.0) : -1.0, fingerprint}, mag,
-                    damping->step(h, FINE_CLOCK));
+  two_step->jump_loop(group_atoms(&clock_assignment->fast_atoms), favg,
+                      {h, rest, more ? MAX(ahead, 0.0) : -1.0, fingerprint}, mag,
+                      damping->step(h, FINE_CLOCK));
   damping->done(FINE_CLOCK);
   const double on = rest + MAX(ahead, 0.0);
-  for (const int i : assign->slow_moving)
+  for (const int i : clock_assignment->slow_moving)
     for (int k = 0; k < 3; k++) {
       x[i][k] += on * v[i][k];
       facc[i][k] += h * favg[i][k];
@@ -1170,7 +1173,7 @@ void FixPEJumpAsync::final_integrate()
   update->atime = end_time;
   grow_work();
   if (watch(OtherFixes::INSIDE_STEP)) {
-    if (scheme->any_changed(group_atoms())) changes_seen = 1;
+    if (two_step->any_changed(group_atoms())) changes_seen = 1;
     refuse_velocity_changes();
   }
   evals->step += split->fraction(InteractionSplit::COARSE);
@@ -1189,22 +1192,22 @@ void FixPEJumpAsync::final_integrate()
   // run continued after this step builds them: every atom at the step end
   if (lists_forced && (neighbor->ago == 0)) build_lists_now();
   const bool tallied = tally->complete();
-  if (nodes->step_end_evaluated(tallied)) lists_fit_step_end();
+  if (node_sampler->step_end_evaluated(tallied)) lists_fit_step_end();
 
   split->activate(InteractionSplit::ALL);
   // no other time integrator (refuse_other_fixes()): no atoms to leave out
-  const double at_end = nodes->at_step_end(others->step_observed(), 0, tallied);
+  const double at_end = node_sampler->at_step_end(others->step_observed(), 0, tallied);
   split->restore();
   if (tallied) add_fine_forces_at_end();
   evals->step += at_end;
   evals->total += evals->step;
-  scheme->forget_energies();
+  two_step->forget_energies();
 
   // the labels are output only: take them where something looks, when
   // at_step_end() has brought the ghosts to the node
-  const bool ghosts_at_node = nodes->step_tallies() || others->step_observed();
-  if (ghosts_at_node) classes->label(*split, *assign, groupbit);
-  assign->evaluate_at_node(update->ntimestep, 1, ghosts_at_node);
+  const bool ghosts_at_node = node_sampler->step_tallies() || others->step_observed();
+  if (ghosts_at_node) classes->label(*split, *clock_assignment, groupbit);
+  clock_assignment->evaluate_at_node(update->ntimestep, 1, ghosts_at_node);
 }
 
 /* ----------------------------------------------------------------------
@@ -1218,8 +1221,8 @@ void FixPEJumpAsync::final_integrate()
 void FixPEJumpAsync::add_fine_forces_at_end()
 {
   double **f = atom->f;
-  double **fstart = scheme->fstart();
-  for (const int i : assign->moving_atoms)
+  double **fstart = two_step->fstart();
+  for (const int i : clock_assignment->moving_atoms)
     for (int k = 0; k < 3; k++) f[i][k] += fstart[i][k];
 }
 
@@ -1231,10 +1234,11 @@ void FixPEJumpAsync::add_fine_forces_at_end()
 
 void FixPEJumpAsync::keep_coarse_primary(double **f)
 {
-  double **fcoarse = state->vec(FCOARSE);
-  double **fstart = rule->reuses_start_node() ? state->vec(FSTART_COARSE) : nullptr;
+  double **fcoarse = state->vec(fcoarse_field);
+  double **fstart = rule->reuses_start_node() ? state->vec(fstart_coarse_field) : nullptr;
   const auto begin = rule->start_sum();
-  for (const int i : assign->slow_atoms) begin(f[i], fstart ? fstart[i] : nullptr, fcoarse[i]);
+  for (const int i : clock_assignment->slow_atoms)
+    begin(f[i], fstart ? fstart[i] : nullptr, fcoarse[i]);
 }
 
 /* ----------------------------------------------------------------------
@@ -1245,7 +1249,7 @@ void FixPEJumpAsync::keep_coarse_primary(double **f)
    midpoint and Legendre rules: position Verlet for these forces) on its
    free-flight velocity, which carries it on; at the end node (Lobatto
    rules: velocity Verlet) half on the node velocity there and half as the
-   next coarse step begins (END_IMPULSE). Returns the coarse interactions'
+   next coarse step begins (end_impulse_field). Returns the coarse interactions'
    forces.
 ------------------------------------------------------------------------- */
 
@@ -1260,18 +1264,18 @@ double **FixPEJumpAsync::coarse_forces_apart()
   }
   const int nlocal = atom->nlocal;
   if (sampler->has_projections()) {
-    NodeSampler::Keep keep(*nodes);
+    NodeSampler::Keep keep(*node_sampler);
     if (nlocal) memcpy(&atom->f[0][0], &fcoarse[0][0], 3 * sizeof(double) * nlocal);
     sampler->project();
     if (nlocal) memcpy(&fcoarse[0][0], &atom->f[0][0], 3 * sizeof(double) * nlocal);
   }
   double **f = atom->f;
   double **v = atom->v;
-  double **pending = (END_IMPULSE >= 0) ? state->vec(END_IMPULSE) : nullptr;
+  double **pending = (end_impulse_field >= 0) ? state->vec(end_impulse_field) : nullptr;
   impulse_pending = (pending != nullptr);
   const double kick = update->dt * force->ftm2v;
   group_atoms().each(atom->mask, nlocal, [&](int i) {
-    const double scale = kick * scheme->inverse_mass_of(i);
+    const double scale = kick * two_step->inverse_mass_of(i);
     for (int k = 0; k < 3; k++) {
       const double dv = scale * (f[i][k] - fcoarse[i][k]);
       if (pending)
@@ -1291,11 +1295,11 @@ double **FixPEJumpAsync::coarse_forces_apart()
 void FixPEJumpAsync::end_impulse_first_half()
 {
   double **v = atom->v;
-  double **pending = state->vec(END_IMPULSE);
+  double **pending = state->vec(end_impulse_field);
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
   group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
     for (int k = 0; k < 3; k++) v[i][k] += pending[i][k];
-    if (fingerprint) scheme->mark(i);
+    if (fingerprint) two_step->mark(i);
   });
 }
 
@@ -1314,17 +1318,18 @@ void FixPEJumpAsync::coarse_quadrature_sum()
   // where one of them would leave half the skin
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   if (xhold) {
-    double local = guard->excursion(group_atoms(&assign->slow_atoms), free_flight(), xhold,
-                                    (rule->node[first] - 1.0) * coarse, 0.0);
+    double local = guard->excursion(group_atoms(&clock_assignment->slow_atoms), free_flight(),
+                                    xhold, (rule->node[first] - 1.0) * coarse, 0.0);
     double worst = 0.0;
     MPI_Allreduce(&local, &worst, 1, MPI_DOUBLE, MPI_MAX, world);
     const double half_skin = 0.5 * neighbor->skin;
     if (worst > half_skin * half_skin) build_lists_now();
   }
   split->activate(InteractionSplit::COARSE);
-  const int evaluated = nodes->sum_nodes(*rule, first, rule->primary(), coarse, -coarse,
-                                         free_flight(), group_atoms(&assign->slow_atoms),
-                                         opts->sample_mask, state->vec(FCOARSE), nullptr, false);
+  const int evaluated =
+      node_sampler->sum_nodes(*rule, first, rule->primary(), coarse, -coarse, free_flight(),
+                              group_atoms(&clock_assignment->slow_atoms), opts->sample_mask,
+                              state->vec(fcoarse_field), nullptr, false);
   evals->step += evaluated * node_cost();
   split->restore();
 }
@@ -1344,7 +1349,7 @@ bool FixPEJumpAsync::primary_is_last_node() const
 
 /* ----------------------------------------------------------------------
    the slow atoms jump with the sums of their fine forces over the coarse
-   step and the coarse quadrature sum (kept in FCOARSE, or with fprimary
+   step and the coarse quadrature sum (kept in fcoarse_field, or with fprimary
    the primary node's forces, see primary_is_last_node()); mag: their
    largest |v|^2, |[v]|^2
 ------------------------------------------------------------------------- */
@@ -1354,7 +1359,7 @@ void FixPEJumpAsync::slow_jumps(double *mag, double **fprimary)
   if (fprimary)
     slow_jumps_as<true>(mag, fprimary);
   else
-    slow_jumps_as<false>(mag, state->vec(FCOARSE));
+    slow_jumps_as<false>(mag, state->vec(fcoarse_field));
 }
 
 /* ----------------------------------------------------------------------
@@ -1365,9 +1370,10 @@ void FixPEJumpAsync::slow_jumps(double *mag, double **fprimary)
 template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double **fcoarse)
 {
   double **v = atom->v;
-  double **jump = scheme->jump();
-  double **facc = state->vec(FACC);
-  double **fstart = (PRIMARY && rule->reuses_start_node()) ? state->vec(FSTART_COARSE) : nullptr;
+  double **jump = two_step->jump();
+  double **facc = state->vec(facc_field);
+  double **fstart = (PRIMARY && rule->reuses_start_node()) ? state->vec(fstart_coarse_field)
+                                                           : nullptr;
   const auto begin = rule->start_sum();
   const double coarse = update->dt;
   const double kick = 2.0 * coarse * force->ftm2v;
@@ -1377,11 +1383,11 @@ template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double *
   // fine impulses scaled by a product: this loop over the slow atoms is a
   // large part of a coarse step's own work)
   const double *rmass = atom->rmass;
-  const double *minv = scheme->inverse_masses();
+  const double *minv = two_step->inverse_masses();
   const int *type = atom->type;
   const double per_time = 1.0 / coarse;
   double vv = mag[0], jj = mag[1];
-  for (const int i : assign->slow_atoms) {
+  for (const int i : clock_assignment->slow_atoms) {
     double fslow[3], most[2] = {0.0, 0.0}, sum[3];
     const double *fc = fcoarse[i];
     if (PRIMARY) {
@@ -1396,7 +1402,7 @@ template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double *
     PEJump::TwoStep::jump_one(dtfm, fslow, v[i], jump[i], most, damp, i);
     vv = MAX(vv, most[0]);
     jj = MAX(jj, most[1]);
-    if (fingerprint) scheme->mark(i);
+    if (fingerprint) two_step->mark(i);
   }
   mag[0] = vv;
   mag[1] = jj;
@@ -1410,9 +1416,9 @@ template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double *
 void FixPEJumpAsync::slow_magnitudes()
 {
   double **v = atom->v;
-  double **jump = scheme->jump();
+  double **jump = two_step->jump();
   double most[2] = {0.0, 0.0};
-  for (const int i : assign->slow_atoms) {
+  for (const int i : clock_assignment->slow_atoms) {
     double vv = 0.0, jj = 0.0;
     for (int k = 0; k < 3; k++) {
       const double vhalf = v[i][k] + 0.5 * jump[i][k];
@@ -1439,7 +1445,7 @@ void FixPEJumpAsync::change_clocks()
   if (opts->fast_auto > 0.0) choose_fast(chosen);
   const std::vector<int> *picked = chosen.empty() ? nullptr : &chosen;
   // (initial_integrate() of the step after the node)
-  const bool due = assign->due(picked, update->ntimestep - 1, 1);
+  const bool due = clock_assignment->due(picked, update->ntimestep - 1, 1);
   // the midpoint rule takes the forces at the node from FINE subsets, the
   // first one of the old clocks (those who leave the fine clock), if two of
   // them cost less than a complete evaluation
@@ -1453,7 +1459,7 @@ void FixPEJumpAsync::change_clocks()
   // ghost atoms must be there too (without energy output at the node they
   // are still where the last evaluation left them)
   if (due && (opts->buffer_layers > 0) && !by_subsets) comm->forward_comm();
-  const bool changed = due && assign->follow(*split, to_fine, picked);
+  const bool changed = due && clock_assignment->follow(*split, to_fine, picked);
   if (due || !split->up_to_date()) sort_by_clock();
   if (!changed) return;
   // the forces at the node: with a Lobatto rule the start nodes of both
@@ -1464,8 +1470,8 @@ void FixPEJumpAsync::change_clocks()
     store_start_node();
     grow_work();
     double **total = work->get(SUM);
-    double **fstart = scheme->fstart();
-    double **fstart_coarse = state->vec(FSTART_COARSE);
+    double **fstart = two_step->fstart();
+    double **fstart_coarse = state->vec(fstart_coarse_field);
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) total[i][k] = fstart[i][k] + fstart_coarse[i][k];
     restart_jumps(to_fine, total);
@@ -1474,14 +1480,14 @@ void FixPEJumpAsync::change_clocks()
     evals->total += fine_forces_at_node(work->get(SUM), &to_fine);
     restart_jumps(to_fine, work->get(SUM));
   } else {
-    NodeSampler::Keep keep(*nodes);
+    NodeSampler::Keep keep(*node_sampler);
     sampler->compute(ForceSampler::ALL, 0, 0);
     restart_jumps(to_fine, atom->f);
     evals->total += 1.0;
   }
   guard->forget_stats();
   slow_magnitudes();
-  classes->label(*split, *assign, groupbit);
+  classes->label(*split, *clock_assignment, groupbit);
 }
 
 /* ----------------------------------------------------------------------
@@ -1497,9 +1503,9 @@ void FixPEJumpAsync::choose_fast(std::vector<int> &chosen) const
 {
   const int nlocal = atom->nlocal;
   const int *mask = atom->mask;
-  const int *slow = assign->slow();
+  const int *slow = clock_assignment->slow();
   double **v = atom->v;
-  double **jump = scheme->jump();
+  double **jump = two_step->jump();
   const double coarse = update->dt;
   const double limit = opts->fast_auto * neighbor->skin;
   chosen.assign(nlocal, 0);
@@ -1538,19 +1544,19 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
     }
   const PEJump::AtomSet atoms = group_atoms(&changed);
   double before[2], after[2];
-  scheme->energies_now(atoms, before);
+  two_step->energies_now(atoms, before);
   const double coarse = update->dt, fine = coarse / clocks->steps();
-  scheme->start(atoms, f, 1.0, [&](int i) {
+  two_step->start(atoms, f, 1.0, [&](int i) {
     return (to_fine[i] > 0) ? fine : coarse;
   });
-  scheme->energies_now(atoms, after);
+  two_step->energies_now(atoms, after);
   // the pseudo-energy pe + (1/2) sum m v^{n-1/2}.v^{n+1/2} = pe + kinetic -
   // jump energy, with positions and node velocities kept
-  assign->add_change_energy(
+  clock_assignment->add_change_energy(
       before[1] - after[1],
       [&]() {
         double e[2];
-        scheme->energies_now(group_atoms(), e);
+        two_step->energies_now(group_atoms(), e);
         return e[0] + e[1];
       },
       style);
@@ -1565,7 +1571,7 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
 void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   if (with_start) {
-    double **facc = state->vec(FACC);
+    double **facc = state->vec(facc_field);
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
   }
@@ -1575,7 +1581,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   const double kick = (opts->init_style == PEJump::Options::KICK) ? 1.0 : 0.0;
   const double coarse = update->dt, fine = coarse / clocks->steps();
   const auto kick_with = [&](double **f) {
-    scheme->start(group_atoms(), f, kick, [&](int i) {
+    two_step->start(group_atoms(), f, kick, [&](int i) {
       return split->coarse(i) ? coarse : fine;
     });
   };
@@ -1583,16 +1589,16 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   // without those that other fixes add: the setup's forces hold what the
   // fixes before this one did only
   if (others->add_forces() || sampler->has_projections()) {
-    NodeSampler::Keep keep(*nodes);
+    NodeSampler::Keep keep(*node_sampler);
     sampler->compute(ForceSampler::ALL, 0, 0);
     evals->total += 1.0;
     kick_with(atom->f);
     // Lobatto rules: the first coarse step begins with half the impulse of
     // the other fixes' forces at q^0, which all of them have added only
     // when the first step begins (those defined after this fix act after
-    // its setup): the interactions' forces wait in END_IMPULSE until then
-    if (with_start && (END_IMPULSE >= 0) && others->add_forces()) {
-      double **pending = state->vec(END_IMPULSE);
+    // its setup): the interactions' forces wait in end_impulse_field until then
+    if (with_start && (end_impulse_field >= 0) && others->add_forces()) {
+      double **pending = state->vec(end_impulse_field);
       double **f = atom->f;
       for (int i = 0; i < atom->nlocal; i++)
         for (int k = 0; k < 3; k++) pending[i][k] = -f[i][k];
@@ -1601,7 +1607,7 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
   } else {
     kick_with(atom->f);
   }
-  scheme->set_started(true);
+  two_step->set_started(true);
   damping->forget_history();
   guard->forget_stats();
 }
@@ -1627,7 +1633,7 @@ double FixPEJumpAsync::compute_vector(int n)
   switch (n) {
     case 0:
     case 1:
-      return scheme->energies(group_atoms())[n];
+      return two_step->energies(group_atoms())[n];
     case 2:
       return update->dt;
     case 3:
@@ -1653,9 +1659,9 @@ double FixPEJumpAsync::compute_vector(int n)
 void FixPEJumpAsync::write_restart(FILE *fp)
 {
   double list[NGLOBAL] = {};
-  list[HEAD] = (scheme->has_started() ? HEAD_STARTED : 0) +
-      (assign->dynamic_group() ? HEAD_DYNAMIC : 0) + (damping->kicked() ? DAMP_KICKED : 0) +
-      (damping->allocated() ? DAMP_FIELDS : 0) +
+  list[HEAD] = (two_step->has_started() ? HEAD_STARTED : 0) +
+      (clock_assignment->dynamic_group() ? HEAD_DYNAMIC : 0) +
+      (damping->kicked() ? DAMP_KICKED : 0) + (damping->allocated() ? DAMP_FIELDS : 0) +
       (damping->has_history(FINE_CLOCK) ? DAMP_FINE : 0) +
       (damping->has_history(COARSE_CLOCK) ? DAMP_COARSE : 0);
   list[FORMAT] = RESTART_FORMAT;
@@ -1663,8 +1669,8 @@ void FixPEJumpAsync::write_restart(FILE *fp)
   list[POINTS] = rule->points();
   list[EVALS_TOTAL] = evals->total;
   list[NFINE] = clocks->steps();
-  assign->save(&list[CLOCKS], &list[FAST_SEEN], &list[BUFFER_REACH]);
-  scheme->save_census(&list[CENSUS]);
+  clock_assignment->save(&list[CLOCKS], &list[FAST_SEEN], &list[BUFFER_REACH]);
+  two_step->save_census(&list[CENSUS]);
   if (comm->me == 0) {
     int size = sizeof(list);
     fwrite(&size, sizeof(int), 1, fp);
@@ -1682,25 +1688,25 @@ void FixPEJumpAsync::restart(char *buf)
   const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
       (static_cast<int>(list[POINTS]) == rule->points());
   const int head = static_cast<int>(list[HEAD]);
-  scheme->set_started((head & HEAD_STARTED) != 0);
+  two_step->set_started((head & HEAD_STARTED) != 0);
   evals->total = list[EVALS_TOTAL];
-  scheme->load_census(&list[CENSUS]);
+  two_step->load_census(&list[CENSUS]);
   const auto restarts = [&](const std::string &why) {
-    if (scheme->has_started() && (comm->me == 0))
+    if (two_step->has_started() && (comm->me == 0))
       utils::logmesg(lmp, "Fix {}: {}: the two-step scheme restarts from the current state\n",
                      style, why);
-    scheme->set_started(false);
+    two_step->set_started(false);
   };
   if (!same_rule) restarts("quadrature differs from the restart file");
   if (static_cast<int>(list[NFINE]) != clocks->steps()) restarts("K differs from the restart file");
-  assign->restore(&list[CLOCKS], &list[FAST_SEEN], &list[BUFFER_REACH]);
-  if (head & HEAD_DYNAMIC) assign->restored_from_dynamic();
+  clock_assignment->restore(&list[CLOCKS], &list[FAST_SEEN], &list[BUFFER_REACH]);
+  if (head & HEAD_DYNAMIC) clock_assignment->restored_from_dynamic();
   // (the per-atom fields may hold the second half of an impulse)
-  impulse_pending = (END_IMPULSE >= 0);
+  impulse_pending = (end_impulse_field >= 0);
   damping->set_kicked((head & DAMP_KICKED) != 0);
   if (head & DAMP_FIELDS) damping->allocate();
-  damping->set_history(((head & DAMP_FINE) != 0) && scheme->has_started(), FINE_CLOCK);
-  damping->set_history(((head & DAMP_COARSE) != 0) && scheme->has_started(), COARSE_CLOCK);
+  damping->set_history(((head & DAMP_FINE) != 0) && two_step->has_started(), FINE_CLOCK);
+  damping->set_history(((head & DAMP_COARSE) != 0) && two_step->has_started(), COARSE_CLOCK);
 }
 
 /* ----------------------------------------------------------------------
@@ -1712,13 +1718,13 @@ void FixPEJumpAsync::restart(char *buf)
 
 void FixPEJumpAsync::check_clocks()
 {
-  if (!assign->changed() || !scheme->has_started()) return;
+  if (!clock_assignment->changed() || !two_step->has_started()) return;
   if (comm->me == 0)
     utils::logmesg(lmp,
                    "Fix {}: the atoms on the fine clock changed since the last run: restarting "
                    "the two-step scheme at this coarse node\n",
                    style);
-  scheme->set_started(false);
+  two_step->set_started(false);
 }
 
 /* ----------------------------------------------------------------------
@@ -1749,9 +1755,9 @@ void FixPEJumpAsync::post_run()
     utils::logmesg(lmp, "Fix {}: {} neighbor list builds by the fix (inside coarse steps)\n", style,
                    builds);
   builds_inside = 0;
-  scheme->end_run(group_atoms(), nodes->tallied(true));
+  two_step->end_run(group_atoms(), node_sampler->tallied(true));
   // the fine clock as the run leaves it (atoms lost through a boundary
   // leave it too), for the next run to compare
-  assign->changed();
-  assign->report(style);
+  clock_assignment->changed();
+  clock_assignment->report(style);
 }

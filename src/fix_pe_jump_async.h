@@ -99,9 +99,9 @@ class FixPEJumpAsync : public Fix {
   PEJump::Options *opts;
   PEJump::Quadrature *rule;
   PEJump::ForceSampler *sampler;
-  PEJump::NodeSampler *nodes;
+  PEJump::NodeSampler *node_sampler;
   PEJump::AtomState *state;
-  PEJump::TwoStep *scheme;
+  PEJump::TwoStep *two_step;
   PEJump::StabilityGuard *guard;
   PEJump::ParasiticDamping *damping;
   PEJump::MovingGhosts *ghosts;
@@ -109,7 +109,7 @@ class FixPEJumpAsync : public Fix {
   PEJump::SplitTally *tally;
   PEJump::InteractionSplit *split;
   PEJump::AsyncClocks *clocks;
-  PEJump::ClockAssignment *assign;
+  PEJump::ClockAssignment *clock_assignment;
   PEJump::ClockClasses *classes;
   PEJump::WorkForces *work;
 
@@ -119,7 +119,7 @@ class FixPEJumpAsync : public Fix {
   // and (Lobatto rules) the half of the other fixes' impulse at the coarse
   // node that the next coarse step begins with
   // and the coarse quadrature sum of a slow atom's coarse interactions
-  int FACC, FSTART_COARSE, END_IMPULSE, FCOARSE;
+  int facc_field, fstart_coarse_field, end_impulse_field, fcoarse_field;
 
   PEJump::Evaluations *evals;    // force evaluations
   int changes_seen;              // another fix changed a velocity (this rank)
@@ -129,8 +129,8 @@ class FixPEJumpAsync : public Fix {
   bigint builds_inside;          // list builds inside coarse steps (this run)
   bool lists_forced;             // LAMMPS builds the lists in this step whatever the atoms do
   double end_time;               // update->atime of the coarse step's end
-  bool impulse_at_start;         // END_IMPULSE holds -F(q^0) until the first step
-  bool impulse_pending;          // END_IMPULSE may hold an impulse (else it is 0)
+  bool impulse_at_start;         // the end impulse field holds -F(q^0) until the first step
+  bool impulse_pending;          // the end impulse field may hold an impulse (else it is 0)
 
   // SUM: fine quadrature sum, COPY: the coarse interactions' forces at the
   // primary coarse node (owned and ghost atoms) apart from those that

@@ -545,7 +545,7 @@ void ClockAssignment::unpack_reverse(int n, const int *list, const double *buf)
 ClockClasses::ClockClasses(LAMMPS *lmp, AtomState &table) :
     Pointers(lmp), state(table), counts{0.0, 0.0, 0.0}
 {
-  KLASS = state.add("klass", 1, OUTSIDE);
+  class_field = state.add("klass", 1, OUTSIDE);
 }
 
 /* ----------------------------------------------------------------------
@@ -560,7 +560,7 @@ void ClockClasses::label(const InteractionSplit &split, ClockAssignment &assign,
 
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
-  double *klass = state.val(KLASS);
+  double *klass = state.val(class_field);
   double local[3] = {0.0, 0.0, 0.0};
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit))
@@ -578,5 +578,5 @@ void ClockClasses::label(const InteractionSplit &split, ClockAssignment &assign,
 
 double *ClockClasses::classes() const
 {
-  return state.val(KLASS);
+  return state.val(class_field);
 }

@@ -167,7 +167,7 @@ namespace PEJump {
 
    private:
     AtomState &state;
-    int KLASS;                          // state field: the class
+    int class_field;                    // state field: the class
     std::vector<int> interface_flag;    // owned and ghost atoms: fine with a slow partner
     double counts[3];                   // global number of slow, mixed, fast atoms
   };

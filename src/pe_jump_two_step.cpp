@@ -36,30 +36,30 @@ TwoStep::TwoStep(LAMMPS *lmp, AtomState &table, bool start_nodes) :
     minimized(false), pending_setup(false), reinitialized(false)
 {
   at_end.atoms = -1;    // no run yet
-  JUMP = state.add("jump", 3, 0.0);
-  VSIG = state.add("vsig", 1, 0.0);
-  FSTART = start_nodes ? state.add("fstart", 3, std::nan("")) : -1;
+  jump_field = state.add("jump", 3, 0.0);
+  vsig_field = state.add("vsig", 1, 0.0);
+  fstart_field = start_nodes ? state.add("fstart", 3, std::nan("")) : -1;
 }
 
 /* ---------------------------------------------------------------------- */
 
 double **TwoStep::jump() const
 {
-  return state.vec(JUMP);
+  return state.vec(jump_field);
 }
 
 /* ---------------------------------------------------------------------- */
 
 double *TwoStep::vsig() const
 {
-  return state.val(VSIG);
+  return state.val(vsig_field);
 }
 
 /* ---------------------------------------------------------------------- */
 
 double **TwoStep::fstart() const
 {
-  return (FSTART >= 0) ? state.vec(FSTART) : nullptr;
+  return (fstart_field >= 0) ? state.vec(fstart_field) : nullptr;
 }
 
 /* ---------------------------------------------------------------------- */

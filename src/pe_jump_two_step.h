@@ -167,7 +167,7 @@ namespace PEJump {
     void jump_loop_as(const AtomSet &, double **favg, const Loop &, double *mag,
                       const ParasiticDamping::Step *damp) const;
     AtomState &state;
-    int JUMP, VSIG, FSTART;
+    int jump_field, vsig_field, fstart_field;
     std::vector<double> inverse_mass;
     bigint cached_step;
     double cached[2];
