@@ -45,7 +45,7 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, Buff
                                  bool chooses) :
     Pointers(lmp),
     fix(owner), fast_group(fast), buffer(layers), finebit(0), clockbit(0), dynamic(false),
-    automatic(chooses),
+    fast_auto(chooses),
     file_dynamic(false), saved_buffer{-1, 0.0}, saved_clock{-1.0, -1.0}, fast_seen{-1.0, -1.0},
     reverse_flags(nullptr)
 {
@@ -77,7 +77,7 @@ void ClockAssignment::warn_if_made_static()
 
 bool ClockAssignment::own_group() const
 {
-  return (buffer.layers > 0) || dynamic || automatic;
+  return (buffer.layers > 0) || dynamic || fast_auto;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -150,7 +150,7 @@ void ClockAssignment::find_groups()
   if (global[1] > 0)
     error->all(FLERR, "Fix pe_jump/async: {} atoms of the fast group are not in the fix group {}",
                global[1], group->names[fix->igroup]);
-  if ((global[0] == 0) && !automatic)
+  if ((global[0] == 0) && !fast_auto)
     error->all(FLERR, "Fix pe_jump/async: the fast group has no atoms in the fix group");
 }
 
@@ -169,7 +169,7 @@ bool ClockAssignment::assign_buffer(bool started, InteractionSplit &split)
   // on the fine clock (atoms that left it stay on the fine clock, as
   // buffer atoms would; a dynamic group or fast auto is followed at
   // coarse nodes)
-  const bool grown = !dynamic && !automatic && started && (fast_off_clock() > 0);
+  const bool grown = !dynamic && !fast_auto && started && (fast_off_clock() > 0);
   const bool redo = own_group() && (!started || (buffer != saved_buffer) || grown);
   saved_buffer = buffer;
   if (!redo) return false;
@@ -261,9 +261,9 @@ void ClockAssignment::evaluate_at_node(bigint node, int steps, bool ghosts_at_no
 
 bool ClockAssignment::due(const std::vector<int> *chosen, bigint node, int steps)
 {
-  if (!dynamic && !automatic) return false;
+  if (!dynamic && !fast_auto) return false;
   ++changes.tally[Changes::NODES];
-  if (!updated_in(node, steps) && !automatic) return false;
+  if (!updated_in(node, steps) && !fast_auto) return false;
   double now[2];
   fast_signature(now, chosen);
   return (now[0] != fast_seen[0]) || (now[1] != fast_seen[1]);
@@ -339,7 +339,7 @@ void ClockAssignment::add_change_energy(double dh, const std::function<double()>
       "Reduce the coarse step (K or the time step), or put the atoms that change clock into the "
       "fast group or its buffer{}",
       style, update->ntimestep, changes.energy, 100.0 * added / scale, scale,
-      automatic ? ", or raise the tolerance of fast auto" : "");
+      fast_auto ? ", or raise the tolerance of fast auto" : "");
   if (added > CHANGE_ENERGY_STOP * scale)
     error->all(FLERR, "{}; the fix stops where this exceeds {} %", what,
                100.0 * CHANGE_ENERGY_STOP);

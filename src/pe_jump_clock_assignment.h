@@ -44,7 +44,7 @@ namespace PEJump {
       double reach;
       bool operator!=(const Buffer &o) const { return (layers != o.layers) || (reach != o.reach); }
     };
-    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, Buffer, bool automatic);
+    ClockAssignment(class LAMMPS *, Fix *, const char *fast_group, Buffer, bool fast_auto);
 
     void create_clock_group();    // after the fix exists (buffer layers only)
     // the group goes with the fix (unfix) unless something else uses it; not
@@ -69,7 +69,7 @@ namespace PEJump {
     void evaluate_at_node(bigint node, int steps, bool ghosts_at_node);
     bool due(const std::vector<int> *chosen, bigint node, int steps);
     bool follow(InteractionSplit &, std::vector<int> &to_fine, const std::vector<int> *chosen);
-    bool follows_group() const { return dynamic || automatic; }
+    bool follows_group() const { return dynamic || fast_auto; }
     bool dynamic_group() const { return dynamic; }
     // the fast group was dynamic when the restart file was written: a
     // warning at the next setup if it is static now (read_restart restores
@@ -125,7 +125,7 @@ namespace PEJump {
     Buffer buffer;
     int finebit, clockbit;
     bool dynamic;             // the fast group is dynamic
-    bool automatic;           // the fix adds atoms to the fast group
+    bool fast_auto;           // the fix adds atoms to the fast group
     bool file_dynamic;        // the restart file's fast group was dynamic
     Buffer saved_buffer;      // of the last run (or restart file)
     double saved_clock[2];    // fine-clock atoms of the last run: number, ID hash

@@ -50,17 +50,17 @@ void ParasiticDamping::forget(int i)
 
 void ParasiticDamping::init(double damp_time, double dt, bool thermostats, bool forcing)
 {
-  automatic = (damp_time < 0.0);
+  damp_auto = (damp_time < 0.0);
   thermostatted = thermostats;
   rate = 0.0;
   if (damp_time > 0.0)
     rate = 1.0 / damp_time;
-  else if (automatic)
+  else if (damp_auto)
     rate = 1.0 / (AUTO_STEPS * dt);
-  on = (damp_time > 0.0) || (automatic && thermostats && (forcing || ever_changed));
+  on = (damp_time > 0.0) || (damp_auto && thermostats && (forcing || ever_changed));
   impulse = 0;
   for (auto &s : last) s.beta = 0.0;
-  if ((damp_time > 0.0) || (automatic && thermostats)) allocate();
+  if ((damp_time > 0.0) || (damp_auto && thermostats)) allocate();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -78,7 +78,7 @@ bool ParasiticDamping::impulse_anywhere(bool seen)
 {
   if (seen && thermostatted) ever_changed = true;
   const bool was = on;
-  if (seen && automatic && thermostatted) on = true;
+  if (seen && damp_auto && thermostatted) on = true;
   return on && !was;
 }
 

@@ -64,10 +64,10 @@ namespace PEJump {
     // the flag reduced over the ranks; true if it turns damp auto on
     bool impulse_anywhere(bool seen);
     bool active() const { return on; }
-    bool automatic_on() const { return automatic && on; }
+    bool automatic_on() const { return damp_auto && on; }
     // a velocity change beside a thermostat is still to be noted (damp auto
     // starts damping there, and remembers it for the following runs)
-    bool awaits_impulse() const { return automatic && thermostatted && !ever_changed; }
+    bool awaits_impulse() const { return damp_auto && thermostatted && !ever_changed; }
     double beta(double h) const;
     // damp auto damps in this run (from_step < 0) or from that step on:
     // the log says so (the damping changes the trajectory at second order
@@ -130,7 +130,7 @@ namespace PEJump {
    private:
     AtomState &state;
     int impulse_field = -1, difference_field = -1;    // state fields, -1 until allocate()
-    bool automatic = true, on = false, thermostatted = false;
+    bool damp_auto = true, on = false, thermostatted = false;
     bool ever_changed = false;
     bool history[NCLOCKS] = {false, false};
     Step last[NCLOCKS] = {};
