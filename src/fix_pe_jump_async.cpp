@@ -1442,7 +1442,9 @@ void FixPEJumpAsync::slow_magnitudes()
 void FixPEJumpAsync::change_clocks()
 {
   std::vector<int> to_fine, chosen;
-  if (opts->fast_auto > 0.0) choose_fast(chosen);
+  if (opts->fast_auto > 0.0)
+    clock_assignment->choose_fast(opts->fast_auto, update->dt, clocks->steps(), two_step->jump(),
+                                  chosen);
   const std::vector<int> *picked = chosen.empty() ? nullptr : &chosen;
   // (initial_integrate() of the step after the node)
   const bool due = clock_assignment->due(picked, update->ntimestep - 1, 1);
@@ -1488,38 +1490,6 @@ void FixPEJumpAsync::change_clocks()
   guard->forget_stats();
   slow_magnitudes();
   classes->label(*split, *clock_assignment, groupbit);
-}
-
-/* ----------------------------------------------------------------------
-   fast auto TOL: at a coarse node, the atoms of the fix group that would
-   move by more than TOL times the neighbor skin over a coarse step on the
-   coarse clock, h_S |v^n + (h_S/h) [v]^n/2| with h their present step (the
-   free flight of their next step with the jump fitted to the coarse
-   step), go on the fine clock; those on it stay while they would move by
-   more than half that (no flapping between the clocks)
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::choose_fast(std::vector<int> &chosen) const
-{
-  const int nlocal = atom->nlocal;
-  const int *mask = atom->mask;
-  const int *slow = clock_assignment->slow();
-  double **v = atom->v;
-  double **jump = two_step->jump();
-  const double coarse = update->dt;
-  const double limit = opts->fast_auto * neighbor->skin;
-  chosen.assign(nlocal, 0);
-  for (int i = 0; i < nlocal; i++) {
-    if (!(mask[i] & groupbit)) continue;
-    const double ratio = slow[i] ? 1.0 : static_cast<double>(clocks->steps());
-    double d2 = 0.0;
-    for (int k = 0; k < 3; k++) {
-      const double u = v[i][k] + 0.5 * ratio * jump[i][k];
-      d2 += u * u;
-    }
-    const double d = coarse * sqrt(d2);
-    chosen[i] = (d > limit) || (!slow[i] && (d > 0.5 * limit));
-  }
 }
 
 /* ----------------------------------------------------------------------

@@ -151,7 +151,6 @@ class FixPEJumpAsync : public Fix {
   void start_scheme(const char *, bool);
   void change_clocks();    // a dynamic fast group or fast auto, at coarse nodes
   double fine_forces_at_node(double **fnode, const std::vector<int> *to_fine);
-  void choose_fast(std::vector<int> &chosen) const;
   void restart_jumps(const std::vector<int> &to_fine, double **f);
   void store_start_node();    // Lobatto start nodes at q^0 (fine, and coarse for slow atoms)
   void continue_scheme();

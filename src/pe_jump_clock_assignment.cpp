@@ -394,6 +394,37 @@ template <typename In> void id_signature(const Atom *atom, MPI_Comm world, In in
 }    // namespace
 
 /* ----------------------------------------------------------------------
+   fast auto TOL (jump: the jumps [v]^n, nfine: K): at a coarse node, the atoms of the fix group that would
+   move by more than TOL times the neighbor skin over a coarse step on the
+   coarse clock, h_S |v^n + (h_S/h) [v]^n/2| with h their present step (the
+   free flight of their next step with the jump fitted to the coarse
+   step), go on the fine clock; those on it stay while they would move by
+   more than half that (no flapping between the clocks)
+------------------------------------------------------------------------- */
+
+void ClockAssignment::choose_fast(double tol, double coarse, int nfine, double **jump,
+                                  std::vector<int> &chosen) const
+{
+  const int nlocal = atom->nlocal;
+  const int *mask = atom->mask;
+  const int *on_coarse = slow();
+  double **v = atom->v;
+  const double limit = tol * neighbor->skin;
+  chosen.assign(nlocal, 0);
+  for (int i = 0; i < nlocal; i++) {
+    if (!(mask[i] & fix->groupbit)) continue;
+    const double ratio = on_coarse[i] ? 1.0 : static_cast<double>(nfine);
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+      const double u = v[i][k] + 0.5 * ratio * jump[i][k];
+      d2 += u * u;
+    }
+    const double d = coarse * sqrt(d2);
+    chosen[i] = (d > limit) || (!on_coarse[i] && (d > 0.5 * limit));
+  }
+}
+
+/* ----------------------------------------------------------------------
    the atoms of the fast group in the fix group (and those chosen)
 ------------------------------------------------------------------------- */
 

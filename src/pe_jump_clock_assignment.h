@@ -95,6 +95,11 @@ namespace PEJump {
     void find_slow(const InteractionSplit &);
     void find_moving(const InteractionSplit &);
     const int *slow() const { return slow_flag.data(); }
+    // fast auto TOL: chosen[i] = 1 for the owned atoms of the fix group
+    // that move too far over a coarse step for the coarse clock (jump: the
+    // jumps [v]^n; nfine: K), see the .cpp
+    void choose_fast(double tol, double coarse, int nfine, double **jump,
+                     std::vector<int> &chosen) const;
     const int *moving() const { return moving_flag.data(); }
     AtomList moving_atoms;    // the atoms of the group that move on fine steps:
     AtomList fast_atoms;      // those on the fine clock
