@@ -497,7 +497,7 @@ void FixPEJumpAsync::refuse_other_fixes() const
   // there, which have no state for the rest of the coarse step
   for (const auto &ifix : modify->get_fix_list()) {
     if (ifix == this) continue;
-    if (OtherFixes::style_is(ifix, {"^wall/reflect", "^oneway"}))
+    if (OtherFixes::reverses_velocities(ifix))
       error->all(FLERR,
                  "Fix pe_jump/async cannot yet be combined with fix {} ({}), which reverses "
                  "velocities inside the coarse step. Use fix pe_jump, or a wall that exerts a "

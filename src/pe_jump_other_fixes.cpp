@@ -26,9 +26,57 @@
 #include "pe_jump_step_variables.h"
 #include "update.h"
 
+#include <map>
+
 using namespace LAMMPS_NS;
 using namespace LAMMPS_NS::PEJump;
 using namespace FixConst;
+
+// What only a fix's style name tells (LAMMPS has no flag for it), one row
+// per trait: the styles as patterns of utils::strmatch()
+namespace {
+enum Trait {
+  LANGEVIN,               // fix langevin (and its variants)
+  TTM,                    // two-temperature models: thermostats without ecouple_flag
+  ENFORCE2D,              // zeroes z components
+  INITIAL_BOOKKEEPING,    // acts in initial_integrate without moving atoms
+  REFLECTS,               // reflecting walls
+  REVERSES,               // fixes that reverse velocities
+  INSERTS_INTO_GROUP,     // inserts atoms with the fix group's bit
+  INSERTS_INTO_ALL,       // inserts atoms with the bit of "all" only
+  OWN_STEP_COUNT,         // forces follow a count of steps of the fix's own
+  READS_ONLY,             // averages, output, group updates, load balance
+  CHANGES_VELOCITIES,     // thermostats and velocity rescaling without ecouple_flag
+  REPLACES_FORCES,        // set, average or project forces
+  ADAPTS,                 // fix adapt
+  VARIABLE_FORCES         // add forces that variables may give
+};
+const std::map<Trait, std::vector<const char *>> NAMED = {
+    {LANGEVIN, {"^langevin"}},
+    {TTM, {"^ttm"}},
+    {ENFORCE2D, {"^enforce2d"}},
+    {INITIAL_BOOKKEEPING, {"^ti/spring", "^dummy"}},
+    {REFLECTS, {"^wall/reflect"}},
+    {REVERSES, {"^wall/reflect", "^oneway"}},
+    {INSERTS_INTO_GROUP, {"^deposit", "^pour", "^gcmc", "^charge/regulation", "^bond/react"}},
+    {INSERTS_INTO_ALL, {"^append/atoms"}},
+    {OWN_STEP_COUNT, {"^smd", "^ti/spring", "^restrain"}},
+    {READS_ONLY,
+     {"^ave/", "^print$", "^vector$", "^store/state$", "^halt$", "^GROUP$", "^balance$"}},
+    {CHANGES_VELOCITIES,
+     {"^temp/", "^momentum", "^heat", "^ehex", "^thermal/conductivity", "^viscosity"}},
+    {REPLACES_FORCES,
+     {"^setforce", "^aveforce", "^freeze", "^lineforce", "^planeforce", "^enforce2d"}},
+    {ADAPTS, {"^adapt"}},
+    {VARIABLE_FORCES, {"^addforce", "^efield", "^gravity", "^indent", "^wall/"}}};
+
+bool is(const Fix *fix, Trait trait)
+{
+  for (const char *pattern : NAMED.at(trait))
+    if (utils::strmatch(fix->style, pattern)) return true;
+  return false;
+}
+}    // namespace
 
 /* ---------------------------------------------------------------------- */
 
@@ -68,14 +116,14 @@ void OtherFixes::sort(ForceSampler &sampler)
                  "velocity Verlet update of fix nve. Use fix nve, or remove the constraints",
                  self->style, ifix->id, ifix->style);
     // of the langevin fixes only the GJF variant acts before the step
-    if (utils::strmatch(ifix->style, "^langevin") && (mask & INITIAL_INTEGRATE))
+    if (is(ifix, LANGEVIN) && (mask & INITIAL_INTEGRATE))
       error->all(FLERR,
                  "Fix {} cannot be combined with fix {} ({}) with keyword gjf: the GJF "
                  "thermostat rewrites velocities and forces for the velocity Verlet update of "
                  "fix nve. Use fix langevin without gjf, or fix nve",
                  self->style, ifix->id, ifix->style);
     // a thermostat anywhere in the system: the run does not conserve energy
-    if (ifix->ecouple_flag || utils::strmatch(ifix->style, "^ttm")) {
+    if (ifix->ecouple_flag || is(ifix, TTM)) {
       ++nthermostats;
       if (mask & POST_FORCE) ++nforcing;
     }
@@ -84,7 +132,7 @@ void OtherFixes::sort(ForceSampler &sampler)
     // only where the atoms carry rotation (omega, angmom, torque), not at
     // the cost of a pass over all atoms at every one of them
     const bool rotation = atom->omega_flag || atom->angmom_flag || atom->torque_flag;
-    if (projects && !rotation && utils::strmatch(ifix->style, "^enforce2d")) continue;
+    if (projects && !rotation && is(ifix, ENFORCE2D)) continue;
     if (projects)
       projections.push_back(ifix);
     else if (mask & POST_FORCE)
@@ -128,7 +176,7 @@ void OtherFixes::warn_langevin_inside_step(const std::string &rule_name, bool pr
 {
   if (primary_at_end || (comm->me != 0)) return;
   const std::string fixes = named([](Fix *fix) {
-    return utils::strmatch(fix->style, "^langevin");
+    return is(fix, LANGEVIN);
   });
   if (!fixes.empty())
     warn_once(fmt::format("Fix {} with quadrature {}: {} acts at the centre of the step, where the "
@@ -162,8 +210,8 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
     const int mask = ifix->setmask();
     if (!primary_at_end) refuse_inside_step(ifix, rule_name);
     // (fix ti/spring only updates its coupling parameter there)
-    const bool moves_atoms = (mask & INITIAL_INTEGRATE) && !ifix->time_integrate &&
-        !utils::strmatch(ifix->style, "^ti/spring") && !utils::strmatch(ifix->style, "^dummy");
+    const bool moves_atoms =
+        (mask & INITIAL_INTEGRATE) && !ifix->time_integrate && !is(ifix, INITIAL_BOOKKEEPING);
     if (!primary_at_end && after && moves_atoms)
       error->all(FLERR,
                  "Fix {} ({}) acts in initial_integrate after fix {}, where fix nve leaves its "
@@ -193,7 +241,7 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
   const int mask = ifix->setmask();
   // fix langevin acts at the end of the step only with tally yes (gjf is
   // refused in sort())
-  if (utils::strmatch(ifix->style, "^langevin") && (mask & END_OF_STEP))
+  if (is(ifix, LANGEVIN) && (mask & END_OF_STEP))
     error->all(FLERR,
                "Fix {} with quadrature {} gives the Langevin impulse at the centre of the step, "
                "but fix {} ({}) with keyword tally yes counts the energy it exchanges as for "
@@ -219,7 +267,7 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
   // the jump with the velocity grew the period-2 mode at walls that move
   // until the run stopped), and the stochastic wall takes the time since the
   // crossing from where the step left an atom beyond the wall (lost atoms)
-  if (utils::strmatch(ifix->style, "^wall/reflect"))
+  if (is(ifix, REFLECTS))
     error->all(FLERR,
                "Fix {} with quadrature {}: fix {} ({}) reflects atoms at the node inside the "
                "step, where the reflected velocity does not fit the atom's jump (an energy "
@@ -228,7 +276,7 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
                self->style, rule_name, ifix->id, ifix->style);
   // fix ttm exchanges energy with the electrons through the velocities at
   // its force call, which lie inside the step here
-  if (utils::strmatch(ifix->style, "^ttm"))
+  if (is(ifix, TTM))
     error->all(FLERR,
                "Fix {} with quadrature {}: fix {} ({}) counts the energy it exchanges with the "
                "electrons from the velocities at its force call, as for velocity Verlet, which "
@@ -357,9 +405,8 @@ bool OtherFixes::may_be_excluded(int a) const
 
 int OtherFixes::inserted_bits(const Fix *fix)
 {
-  if (style_is(fix, {"^deposit", "^pour", "^gcmc", "^charge/regulation", "^bond/react"}))
-    return 1 | fix->groupbit;
-  if (style_is(fix, {"^append/atoms"})) return 1;
+  if (is(fix, INSERTS_INTO_GROUP)) return 1 | fix->groupbit;
+  if (is(fix, INSERTS_INTO_ALL)) return 1;
   return 0;
 }
 
@@ -370,7 +417,7 @@ int OtherFixes::inserted_bits(const Fix *fix)
 
 bool OtherFixes::steps_own_clock(const Fix *fix)
 {
-  return style_is(fix, {"^smd", "^ti/spring", "^restrain"});
+  return is(fix, OWN_STEP_COUNT);
 }
 
 /* ----------------------------------------------------------------------
@@ -382,8 +429,14 @@ bool OtherFixes::steps_own_clock(const Fix *fix)
 
 bool OtherFixes::reads_only(const Fix *fix)
 {
-  return style_is(
-      fix, {"^ave/", "^print$", "^vector$", "^store/state$", "^halt$", "^GROUP$", "^balance$"});
+  return is(fix, READS_ONLY);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool OtherFixes::reverses_velocities(const Fix *fix)
+{
+  return is(fix, REVERSES);
 }
 
 /* ----------------------------------------------------------------------
@@ -396,9 +449,7 @@ bool OtherFixes::reads_only(const Fix *fix)
 
 bool OtherFixes::changes_velocities(const Fix *fix)
 {
-  return (fix->ecouple_flag && !fix->time_integrate) ||
-      style_is(fix,
-               {"^temp/", "^momentum", "^heat", "^ehex", "^thermal/conductivity", "^viscosity"});
+  return (fix->ecouple_flag && !fix->time_integrate) || is(fix, CHANGES_VELOCITIES);
 }
 
 /* ----------------------------------------------------------------------
@@ -407,17 +458,7 @@ bool OtherFixes::changes_velocities(const Fix *fix)
 
 bool OtherFixes::replaces_forces(const Fix *fix)
 {
-  return style_is(fix,
-                  {"^setforce", "^aveforce", "^freeze", "^lineforce", "^planeforce", "^enforce2d"});
-}
-
-/* ---------------------------------------------------------------------- */
-
-bool OtherFixes::style_is(const Fix *fix, std::initializer_list<const char *> patterns)
-{
-  for (const char *pattern : patterns)
-    if (utils::strmatch(fix->style, pattern)) return true;
-  return false;
+  return is(fix, REPLACES_FORCES);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -449,7 +490,7 @@ bool OtherFixes::step_observed() const
 std::string OtherFixes::reversing_fixes() const
 {
   return named([](Fix *fix) {
-    return style_is(fix, {"^wall/reflect", "^oneway"});
+    return is(fix, REVERSES);
   });
 }
 
@@ -465,9 +506,7 @@ void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_
   // (fix setforce and aveforce, which also act at every node, mostly hold
   // atoms with constants: not named, to keep the warning meaningful)
   const std::string fixes = named([&](Fix *fix) {
-    return style_is(fix, {"^adapt"}) ||
-        (!primary_at_end &&
-         style_is(fix, {"^addforce", "^efield", "^gravity", "^indent", "^wall/"}));
+    return is(fix, ADAPTS) || (!primary_at_end && is(fix, VARIABLE_FORCES));
   });
   if (fixes.empty()) return;
   const auto names = step_number_variables(lmp);

@@ -17,7 +17,6 @@
 #include "fix.h"
 
 #include <functional>
-#include <initializer_list>
 #include <set>
 #include <string>
 #include <vector>
@@ -112,8 +111,7 @@ namespace PEJump {
     // rescale or replace them, fix momentum, heat and momentum exchanges
     static bool changes_velocities(const Fix *);
     static bool reads_only(const Fix *);
-    // the fix's style matches one of the patterns (utils::strmatch)
-    static bool style_is(const Fix *, std::initializer_list<const char *> patterns);
+    static bool reverses_velocities(const Fix *);    // reflecting walls, fix oneway
     // the fixes for which keep(fix) holds, for messages: "fix 2 (wall/reflect),
     // fix 3 (oneway)" (empty if none)
     std::string named(const std::function<bool(Fix *)> &keep) const;
