@@ -14,6 +14,7 @@
 #include "pe_jump_two_step.h"
 
 #include "atom.h"
+#include "atom_vec.h"
 #include "comm.h"
 #include "domain.h"
 #include "error.h"
@@ -80,6 +81,11 @@ void TwoStep::init(const char *style)
   if (atom->torque_flag)
     error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
                atom->atom_style);
+  // (the force evaluations of the fixes clear atom->f only, not the extra
+  // per-atom forces that such styles clear in Verlet::force_clear)
+  if (atom->avec->forceclearflag)
+    error->all(FLERR, "Fix {} does not integrate the extra per-atom quantities of atom style {}",
+               style, atom->atom_style);
 
   // a division per atom costs more than the rest of the update
   inverse_mass.assign(atom->ntypes + 1, 0.0);

@@ -4,6 +4,8 @@
 
 #include "pe_jump_systems.h"
 
+#include "atom_vec.h"
+
 #include "domain.h"
 #include "exceptions.h"
 #include "fix.h"
@@ -499,14 +501,30 @@ TEST(PEJump, LoadFromRestIsNoInstability)
 std::string head_on_collision(double dt, double *pseudo_change)
 {
   Sim s;
-  s.cmds({"units lj", "atom_style atomic", "boundary p p p", "region box block -6 6 -6 6 -6 6",
-          "create_box 1 box", "create_atoms 1 single -1.5 0.05 0", "create_atoms 1 single 1.5 0 0",
-          "mass 1 1.0", "pair_style lj/cut 2.5", "pair_coeff 1 1 1.0 1.0", "neighbor 0.3 bin",
-          "neigh_modify every 1 delay 0 check yes", "group a id 1", "group b id 2",
-          "velocity a set 4.0 0 0", "velocity b set -4.0 0 0", "fix 1 all pe_jump",
-          fmt::format("timestep {}", dt), "thermo 0", "run 0 post no"});
+  s.cmds({"units lj",
+          "atom_style atomic",
+          "boundary p p p",
+          "region box block -6 6 -6 6 -6 6",
+          "create_box 1 box",
+          "create_atoms 1 single -1.5 0.05 0",
+          "create_atoms 1 single 1.5 0 0",
+          "mass 1 1.0",
+          "pair_style lj/cut 2.5",
+          "pair_coeff 1 1 1.0 1.0",
+          "neighbor 0.3 bin",
+          "neigh_modify every 1 delay 0 check yes",
+          "group a id 1",
+          "group b id 2",
+          "velocity a set 4.0 0 0",
+          "velocity b set -4.0 0 0",
+          "fix 1 all pe_jump",
+          fmt::format("timestep {}", dt),
+          "thermo 0",
+          "run 0 post no"});
   const double h0 = pseudo_energy(s);
-  const std::string error = error_from([&]() { s.cmd("run 100 post no"); });
+  const std::string error = error_from([&]() {
+    s.cmd("run 100 post no");
+  });
   if (pseudo_change) *pseudo_change = std::fabs(pseudo_energy(s) - h0) / h0;
   return error;
 }
@@ -1613,6 +1631,24 @@ TEST(PEJump, BadInputGivesClearErrors)
                                            "pair_coeff * *",
                                            "fix 1 all pe_jump"};
   EXPECT_THAT(error_of(sphere, "run 1"), ContainsRegex("integrates point particles only"));
+
+  // atom styles with extra per-atom forces (electron, spin, sph, dpd-meso,
+  // ...: none is in this build, so an atomic style says it has them), which
+  // Verlet clears at every force evaluation and their own integrators
+  // integrate, are refused by both fixes
+  for (const std::string fix : {"pe_jump", "pe_jump/async 5 fast"}) {
+    Sim s;
+    lj_liquid(s, 2);
+    s.cmds({"group fast id 1", "fix 1 all " + fix});
+    s.lmp->atom->avec->forceclearflag = 1;
+    std::string error = "no error";
+    try {
+      s.cmd("run 1");
+    } catch (LAMMPS_NS::LAMMPSException &e) {
+      error = e.what();
+    }
+    EXPECT_THAT(error, ContainsRegex("does not integrate the extra per-atom quantities")) << fix;
+  }
 }
 
 /* ----------------------------------------------------------------------
