@@ -116,6 +116,10 @@ FixPEJump::FixPEJump(LAMMPS *lmp, int narg, char **arg) :
                                                  : (opts->compensate != 0);
   step_control = new StepControl(lmp, *state, opts->adapt_eps, opts->adapt_dtmin, opts->adapt_dtmax,
                                  compensate);
+  // adapt changes the time step, as fix dt/reset does: LAMMPS then keeps
+  // the elapsed time of changing steps (update->atime), which
+  // reset_timestep would lose, so it refuses that command beside the fix
+  if (step_control->adapts()) time_depend = 1;
   damping = new PEJump::ParasiticDamping(*state);
 
   time_integrate = 1;

@@ -69,6 +69,16 @@ inline std::string error_of(const std::vector<std::string> &commands)
   }
   return "no error";
 }
+// the error of one more command in an instance, or "no error"
+inline std::string error_in(Sim &s, const std::string &command)
+{
+  try {
+    s.cmd(command);
+  } catch (LAMMPS_NS::LAMMPSException &e) {
+    return e.what();
+  }
+  return "no error";
+}
 inline std::string error_of(std::vector<std::string> setup, const std::string &failing)
 {
   setup.push_back(failing);

@@ -1534,6 +1534,29 @@ TEST(PEJump, AdaptHoldsBoundAndStepGrowsBack)
   EXPECT_GT(dtmax / dtmin, 1.5);
 }
 
+// adapt changes the time step as fix dt/reset does, so LAMMPS keeps the
+// elapsed time of changing steps and refuses reset_timestep beside it
+// (which would lose that time); without adapt the fix does not change it
+TEST(PEJump, AdaptIsTimeDependentAsFixDtReset)
+{
+  for (const bool adapt : {false, true}) {
+    Sim s;
+    fpu_gni(s);
+    s.cmds({std::string("fix 1 chain pe_jump quadrature lobatto 3") +
+                (adapt ? " adapt 1e-6 1e-5 0.004" : ""),
+            "timestep 1e-4", "thermo 0", "run 50 post no"});
+    const double t = s.lmp->update->atime +
+        (s.lmp->update->ntimestep - s.lmp->update->atimestep) * s.lmp->update->dt;
+    const std::string error = error_in(s, "reset_timestep 0");
+    if (adapt) {
+      EXPECT_THAT(error, ContainsRegex("Cannot reset timestep with time-dependent fix pe_jump"));
+      EXPECT_NE(t, 50 * 1e-4);    // the steps changed: the elapsed time is not 50 h
+    } else {
+      EXPECT_EQ(error, "no error");
+    }
+  }
+}
+
 // adapt started from a time step above what eps allows: the first step
 // is cut before the initial kick, so the error follows eps. Before, the
 // controller cut the step at once after a first step of the full size
