@@ -46,7 +46,6 @@ enum Trait {
   INSERTS_INTO_ALL,       // inserts atoms with the bit of "all" only
   OWN_STEP_COUNT,         // forces follow a count of steps of the fix's own
   READS_ONLY,             // averages, output, group updates, load balance
-  CHANGES_VELOCITIES,     // thermostats and velocity rescaling without ecouple_flag
   REPLACES_FORCES,        // set, average or project forces
   ADAPTS,                 // fix adapt
   VARIABLE_FORCES         // add forces that variables may give
@@ -63,8 +62,6 @@ const std::map<Trait, std::vector<const char *>> NAMED = {
     {OWN_STEP_COUNT, {"^smd", "^ti/spring", "^restrain"}},
     {READS_ONLY,
      {"^ave/", "^print$", "^vector$", "^store/state$", "^halt$", "^GROUP$", "^balance$"}},
-    {CHANGES_VELOCITIES,
-     {"^temp/", "^momentum", "^heat", "^ehex", "^thermal/conductivity", "^viscosity"}},
     {REPLACES_FORCES,
      {"^setforce", "^aveforce", "^freeze", "^lineforce", "^planeforce", "^enforce2d"}},
     {ADAPTS, {"^adapt"}},
@@ -437,19 +434,6 @@ bool OtherFixes::reads_only(const Fix *fix)
 bool OtherFixes::reverses_velocities(const Fix *fix)
 {
   return is(fix, REVERSES);
-}
-
-/* ----------------------------------------------------------------------
-   fixes whose purpose is to change velocities during a run: thermostats
-   that rescale or replace them, which report the energy they exchange
-   (temp/berendsen, temp/rescale, temp/csvr, temp/csld), fix momentum, and
-   the exchanges of heat or momentum (heat, ehex, thermal/conductivity,
-   viscosity)
-------------------------------------------------------------------------- */
-
-bool OtherFixes::changes_velocities(const Fix *fix)
-{
-  return (fix->ecouple_flag && !fix->time_integrate) || is(fix, CHANGES_VELOCITIES);
 }
 
 /* ----------------------------------------------------------------------

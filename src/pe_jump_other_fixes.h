@@ -107,9 +107,6 @@ namespace PEJump {
     // inserts none)
     static int inserted_bits(const Fix *);
     static bool replaces_forces(const Fix *);
-    // fixes made to change velocities during a run: thermostats that
-    // rescale or replace them, fix momentum, heat and momentum exchanges
-    static bool changes_velocities(const Fix *);
     static bool reads_only(const Fix *);
     static bool reverses_velocities(const Fix *);    // reflecting walls, fix oneway
     // the fixes for which keep(fix) holds, for messages: "fix 2 (wall/reflect),
