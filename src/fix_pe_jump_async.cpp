@@ -550,9 +550,7 @@ void FixPEJumpAsync::refuse_pair_misfit() const
   if (fit == InteractionSplit::OFF_PAIRS)
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: the force of a pair acts on other "
-               "atoms than the two of the pair (e.g. on the hydrogen of a hydrogen bond, or on "
-               "the atoms of TIP4P molecules), which the split cannot put on their clocks. Use "
-               "fix pe_jump",
+               "atoms than the two of the pair. Use fix pe_jump",
                force->pair_style);
   if (fit == InteractionSplit::NOT_ADDITIVE)
     error->all(FLERR,

@@ -76,12 +76,8 @@ void ForceSampler::refuse_velocity_forces(const char *style, const std::string &
 {
   if (!comm->ghost_velocity || end_nodes) return;
   error->all(FLERR,
-             "Fix {} with quadrature {}: comm_modify vel yes is set, as force styles whose "
-             "forces depend on the velocities need (dpd, granular, bpm damping, lubricate, "
-             "...). Such forces drive the alternating mode of the momentum jumps, which then "
-             "grows at any time step. Use quadrature lobatto 2 (fix pe_jump; velocity Verlet "
-             "for these forces) or fix nve, or comm_modify vel no if no force depends on the "
-             "velocities",
+             "Fix {} with quadrature {}: comm_modify vel yes is set (forces that depend on "
+             "velocities grow the jumps). Use quadrature lobatto 2, fix nve, or comm_modify vel no",
              style, rule);
 }
 
@@ -98,10 +94,8 @@ void ForceSampler::refuse_stateful_forces(const char *style, const std::string &
   if (!atom->peri_flag || end_nodes) return;
   error->all(FLERR,
              "Fix {} with quadrature {}: pair style {} advances the state of its bonds at every "
-             "force evaluation (broken bonds, and the viscoelastic or plastic history of "
-             "peri/ves and peri/eps by a whole time step), and this rule evaluates the forces "
-             "inside the step or more than once per step. Use quadrature lobatto 2 (one "
-             "evaluation per step, at its end) or fix nve",
+             "force evaluation, and this rule evaluates more than once per step. Use quadrature "
+             "lobatto 2 or fix nve",
              style, rule, force->pair_style);
 }
 

@@ -211,19 +211,14 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
         (mask & INITIAL_INTEGRATE) && !ifix->time_integrate && !is(ifix, INITIAL_BOOKKEEPING);
     if (!primary_at_end && after && moves_atoms)
       error->all(FLERR,
-                 "Fix {} ({}) acts in initial_integrate after fix {}, where fix nve leaves its "
-                 "atoms at the end of the step; with quadrature {} fix {} leaves them at the "
-                 "centre of the step there, which fix {} would take for the end. Use quadrature "
-                 "lobatto 2 or 3 (the forces are taken at the step end), or define fix {} before "
-                 "fix {}",
-                 ifix->id, ifix->style, self->id, rule_name, self->id, ifix->id, ifix->id,
-                 self->id);
+                 "Fix {} ({}) acts in initial_integrate after fix {}, which leaves the atoms "
+                 "inside the step with quadrature {}. Use quadrature lobatto 2 or 3, or define "
+                 "fix {} before fix {}",
+                 ifix->id, ifix->style, self->id, rule_name, ifix->id, self->id);
     if (!only_end_nodes && ifix->time_integrate && ifix->box_change)
       error->all(FLERR,
                  "Fix {} with quadrature {}: fix {} ({}) changes the box inside the step while "
-                 "it integrates its atoms, rescaling the positions of all atoms, so the forces "
-                 "at the nodes inside the step would mix times. Use quadrature lobatto 2 (forces "
-                 "at the step ends only)",
+                 "it integrates its atoms. Use quadrature lobatto 2",
                  self->style, rule_name, ifix->id, ifix->style);
   }
 }
@@ -240,10 +235,8 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
   // refused in sort())
   if (is(ifix, LANGEVIN) && (mask & END_OF_STEP))
     error->all(FLERR,
-               "Fix {} with quadrature {} gives the Langevin impulse at the centre of the step, "
-               "but fix {} ({}) with keyword tally yes counts the energy it exchanges as for "
-               "velocity Verlet (half the impulse at each end of the step), so its tally would "
-               "be wrong. Use quadrature lobatto 2 or 3, or tally no",
+               "Fix {} with quadrature {}: fix {} ({}) with keyword tally yes counts the energy "
+               "it exchanges as for velocity Verlet. Use quadrature lobatto 2 or 3, or tally no",
                self->style, rule_name, ifix->id, ifix->style);
   // fixes whose forces follow a count of steps of their own (a tether that
   // moves by a step's length per force call, a coupling or force constant
@@ -253,10 +246,8 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
     error->all(
         FLERR,
         "Fix {} with quadrature {}: fix {} ({}) sets its forces from its own count of "
-        "steps (smd with cvel moves its tether by a step's length at each force call, "
-        "ti/spring and restrain ramp their constants by the step number), which the force at the "
-        "centre of the step would take at the step's end (first order in the step). "
-        "Use quadrature lobatto 2 or 3 (forces at the step ends)",
+        "steps, which a force inside the step takes at the step's end. Use quadrature lobatto 2 "
+        "or 3",
         self->style, rule_name, ifix->id, ifix->style);
   // walls that reflect atoms act at the primary node, inside the step: the
   // reflection leaves the atom's jump, which no longer fits its velocity
@@ -267,18 +258,15 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
   if (is(ifix, REFLECTS))
     error->all(FLERR,
                "Fix {} with quadrature {}: fix {} ({}) reflects atoms at the node inside the "
-               "step, where the reflected velocity does not fit the atom's jump (an energy "
-               "drift 20 times that of fix nve). Use quadrature lobatto 2 (velocity Verlet, "
-               "the same reflections as fix nve) or lobatto 3",
+               "step, where the reflected velocity does not fit the atom's jump. Use quadrature "
+               "lobatto 2 or 3",
                self->style, rule_name, ifix->id, ifix->style);
   // fix ttm exchanges energy with the electrons through the velocities at
   // its force call, which lie inside the step here
   if (is(ifix, TTM))
     error->all(FLERR,
                "Fix {} with quadrature {}: fix {} ({}) counts the energy it exchanges with the "
-               "electrons from the velocities at its force call, as for velocity Verlet, which "
-               "lie inside the step here, so the electron temperature would go wrong. Use "
-               "quadrature lobatto 2 or 3",
+               "electrons from velocities inside the step. Use quadrature lobatto 2 or 3",
                self->style, rule_name, ifix->id, ifix->style);
 }
 
@@ -357,18 +345,16 @@ void OtherFixes::refuse_inserted_atoms(const std::string &rule_name, bool interi
       if (!interior || !pairs) continue;
       if (theirs && populated(0) && !may_be_excluded(bits))
         error->all(FLERR,
-                   "Fix {} with quadrature {} evaluates forces inside the step, but fix {} ({}) "
-                   "inserts atoms that fix {} ({}) integrates and that will interact with this "
-                   "fix's atoms: the forces between them would mix times. Use quadrature "
-                   "lobatto 2, or let fix {} insert into the group of this fix",
+                   "Fix {} with quadrature {}: fix {} ({}) inserts atoms that fix {} ({}) "
+                   "integrates and that will interact with this fix's atoms. Use quadrature "
+                   "lobatto 2, or let fix {} insert into this fix's group",
                    self->style, rule_name, ifix->id, ifix->style, other->id, other->style,
                    ifix->id);
       if (mine && populated(set) && !may_be_excluded(bits))
         error->all(FLERR,
-                   "Fix {} with quadrature {} evaluates forces inside the step, but fix {} ({}) "
-                   "inserts atoms into its group that will interact with the atoms of fix {} "
-                   "({}): the forces between them would mix times. Use quadrature lobatto 2, or "
-                   "integrate all interacting atoms with one fix {}",
+                   "Fix {} with quadrature {}: fix {} ({}) inserts atoms into its group that will "
+                   "interact with the atoms of fix {} ({}). Use quadrature lobatto 2, or one fix "
+                   "{} for all interacting atoms",
                    self->style, rule_name, ifix->id, ifix->style, other->id, other->style,
                    self->style);
     }
@@ -540,10 +526,8 @@ void OtherFixes::refuse_interactions(const char *rule_name) const
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   if (global)
     error->all(FLERR,
-               "Fix {} with quadrature {} evaluates forces inside the step, but atoms of another "
-               "time integrator interact with its atoms at step {}: their positions are those "
-               "of the step end, so the forces between the two sets would mix times. Use "
-               "quadrature lobatto 2 (forces at the step ends only), or integrate all "
-               "interacting atoms with one fix {}",
+               "Fix {} with quadrature {}: atoms of another time integrator interact with its "
+               "atoms at step {}. Use quadrature lobatto 2, or one fix {} for all interacting "
+               "atoms",
                self->style, rule_name, update->ntimestep, self->style);
 }
