@@ -211,8 +211,7 @@ void FixPEJump::refuse_atoms_outside_include_group() const
   if (outside > 0)
     error->all(FLERR,
                "Fix {} moves every atom of its group every step, but {} of them are not in the "
-               "neigh_modify include group {}: LAMMPS would neither clear their forces nor "
-               "check their distances. Remove neigh_modify include (and atom_modify first)",
+               "neigh_modify include group {}. Remove neigh_modify include",
                style, outside, group->names[neighbor->includegroup]);
 }
 
@@ -271,9 +270,8 @@ void FixPEJump::refuse_step_counters() const
     // (fix nve with fix dt/reset has the same problem in LAMMPS)
     if (utils::strmatch(ifix->style, "^deform"))
       error->all(FLERR,
-                 "Fix {} adapt changes the time step, but fix {} ({}) changes the box by the "
-                 "step count, as if the step were constant: the box would run ahead of or "
-                 "behind the time. Use a fixed time step with fix deform",
+                 "Fix {} adapt changes the time step, but fix {} ({}) changes the box by the step "
+                 "count. Use a fixed time step with fix deform",
                  style, ifix->id, ifix->style);
   }
 }

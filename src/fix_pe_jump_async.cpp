@@ -529,8 +529,7 @@ void FixPEJumpAsync::refuse_velocity_changes()
   if (any)
     error->all(FLERR,
                "Fix pe_jump/async: another fix changed velocities inside the coarse step of step "
-               "{} (before the force evaluation at its primary node); pe_jump/async takes velocity "
-               "changes at coarse nodes only (between steps). Use fix pe_jump",
+               "{}; pe_jump/async takes velocity changes between steps only. Use fix pe_jump",
                update->ntimestep);
 }
 
@@ -555,14 +554,12 @@ void FixPEJumpAsync::refuse_pair_misfit() const
   if (fit == InteractionSplit::NOT_ADDITIVE)
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: the force of two pairs of an atom is "
-               "not the sum of the forces of each (a many-body style, e.g. local/density, whose "
-               "pair forces depend on the atoms' local densities). Use fix pe_jump",
+               "not the sum of the forces of each. Use fix pe_jump",
                force->pair_style);
   if (fit == InteractionSplit::ON_TIME)
     error->all(FLERR,
                "Fix pe_jump/async cannot take pair style {}: its forces depend on the time or the "
-               "step (e.g. pair_style hybrid/scaled with a variable of time), which the fine and "
-               "coarse nodes would see at the end of the step (first order). Use fix pe_jump",
+               "step. Use fix pe_jump",
                force->pair_style);
 }
 

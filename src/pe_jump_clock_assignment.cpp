@@ -60,12 +60,11 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, Buff
 void ClockAssignment::warn_if_made_static()
 {
   if (file_dynamic && !dynamic && (comm->me == 0))
-    error->warning(FLERR,
-                   "Fix pe_jump/async: the fast group was dynamic when the restart file was "
-                   "written, and read_restart restores groups as static ones: if {} is to "
-                   "follow its criterion, give its group dynamic command again after "
-                   "read_restart",
-                   fast_group);
+    error->warning(
+        FLERR,
+        "Fix pe_jump/async: the fast group was dynamic when the restart file was written; "
+        "read_restart restores it as static: give its group dynamic command ({}) again",
+        fast_group);
   file_dynamic = false;
 }
 

@@ -167,8 +167,7 @@ void InteractionSplit::check_topology() const
   if (topology_count() != topology)
     error->all(FLERR,
                "Fix pe_jump/async: the bonds, angles, dihedrals or impropers changed during the "
-               "run (from {} to {}), e.g. by a fix that creates or breaks bonds: the "
-               "interaction split cannot follow. Use fix pe_jump",
+               "run (from {} to {}). Use fix pe_jump",
                topology, topology_count());
 }
 

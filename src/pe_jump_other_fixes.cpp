@@ -115,9 +115,8 @@ void OtherFixes::sort(ForceSampler &sampler)
     // of the langevin fixes only the GJF variant acts before the step
     if (is(ifix, LANGEVIN) && (mask & INITIAL_INTEGRATE))
       error->all(FLERR,
-                 "Fix {} cannot be combined with fix {} ({}) with keyword gjf: the GJF "
-                 "thermostat rewrites velocities and forces for the velocity Verlet update of "
-                 "fix nve. Use fix langevin without gjf, or fix nve",
+                 "Fix {} cannot be combined with fix {} ({}) with keyword gjf. Use fix langevin "
+                 "without gjf, or fix nve",
                  self->style, ifix->id, ifix->style);
     // a thermostat anywhere in the system: the run does not conserve energy
     if (ifix->ecouple_flag || is(ifix, TTM)) {

@@ -75,8 +75,7 @@ void TwoStep::init(const char *style)
   if (!(update->dt > 0.0))
     error->all(FLERR,
                "Fix {} needs a timestep > 0, got {}: to run backwards in time, reverse the "
-               "velocities instead (variable rx atom -vx, likewise ry and rz, then velocity all "
-               "set v_rx v_ry v_rz), which the fix continues exactly",
+               "velocities instead",
                style, update->dt);
   if (atom->torque_flag)
     error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
