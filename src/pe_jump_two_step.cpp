@@ -394,11 +394,12 @@ std::string TwoStep::changed_since_run(const Census &now, bool new_step_restarts
 {
   if (minimized) return "the atoms were moved by an energy minimization since the last run";
   if (at_end.atoms < 0) return "";
-  if (now.atoms < at_end.atoms)
-    return fmt::format("{} atoms of the group were deleted (or left it) since the last run",
-                       at_end.atoms - now.atoms);
-  if (now.atoms > at_end.atoms)
-    return fmt::format("{} atoms joined the group since the last run", now.atoms - at_end.atoms);
+  // (the counts only: atoms deleted and created in between, or moved out
+  // of and into the group, are not told apart)
+  if (now.atoms != at_end.atoms)
+    return fmt::format("the group had {} atoms at the end of the last run and has {} now (atoms "
+                       "deleted, created, or moved out of or into it)",
+                       at_end.atoms, now.atoms);
   // wrapping into a periodic box changes a position by round-off only
   const double tolerance = 1e-12 * std::max(now.scale, at_end.scale);
   for (int k = 0; k < 3; k++)
