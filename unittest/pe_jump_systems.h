@@ -57,27 +57,32 @@ class Sim {
   LAMMPS *lmp;
 };
 
-// the first error of a sequence of commands in a fresh instance, or
-// "no error"
-inline std::string error_of(const std::vector<std::string> &commands)
+// the message of the LAMMPS error that body() raises, or "no error"
+template <typename Body> std::string error_from(Body &&body)
 {
-  Sim s;
   try {
-    s.cmds(commands);
+    body();
   } catch (LAMMPS_NS::LAMMPSException &e) {
     return e.what();
   }
   return "no error";
 }
+
+// the first error of a sequence of commands in a fresh instance, or
+// "no error"
+inline std::string error_of(const std::vector<std::string> &commands)
+{
+  Sim s;
+  return error_from([&] {
+    s.cmds(commands);
+  });
+}
 // the error of one more command in an instance, or "no error"
 inline std::string error_in(Sim &s, const std::string &command)
 {
-  try {
+  return error_from([&] {
     s.cmd(command);
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    return e.what();
-  }
-  return "no error";
+  });
 }
 inline std::string error_of(std::vector<std::string> setup, const std::string &failing)
 {

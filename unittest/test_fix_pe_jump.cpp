@@ -1696,12 +1696,9 @@ TEST(PEJump, BadInputGivesClearErrors)
     lj_liquid(s, 2);
     s.cmds({"group fast id 1", "fix 1 all " + fix});
     s.lmp->atom->avec->forceclearflag = 1;
-    std::string error = "no error";
-    try {
+    const std::string error = error_from([&] {
       s.cmd("run 1");
-    } catch (LAMMPS_NS::LAMMPSException &e) {
-      error = e.what();
-    }
+    });
     EXPECT_THAT(error, ContainsRegex("does not integrate the extra per-atom quantities")) << fix;
   }
 }

@@ -626,12 +626,9 @@ TEST(PEJumpAsync, RunAfterACaughtErrorIsNotRefused)
   EXPECT_THROW(s.cmd("run 5 post no"), LAMMPS_NS::LAMMPSException);
   s.cmds({"unfix 2", "unfix 3"});
   s.cmds(fix);
-  std::string error = "no error";
-  try {
+  const std::string error = error_from([&] {
     s.cmd("run 4 post no");
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    error = e.what();
-  }
+  });
   EXPECT_EQ(error, "no error");
   Sim fresh;
   lj_liquid(fresh);
@@ -652,14 +649,11 @@ TEST(PEJumpAsync, FineClockGroupGoesWithTheFix)
   Sim s;
   lj_liquid(s);
   s.cmds({"group fast id 1:20", "timestep 0.025", "thermo 0"});
-  std::string error = "no error";
-  try {
+  const std::string error = error_from([&] {
     for (int n = 1; n <= 40; n++)
       s.cmds({fmt::format("fix f{} all pe_jump/async 5 fast buffer 1", n), "run 1 post no",
               fmt::format("unfix f{}", n)});
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    error = e.what();
-  }
+  });
   EXPECT_EQ(error, "no error");
   EXPECT_LT(s.lmp->group->find("f40_fine_clock"), 0);
   s.cmds({"fix kept all pe_jump/async 5 fast buffer 1", "run 1 post no",
@@ -782,12 +776,9 @@ TEST(PEJumpAsync, CoarseStepBeyondStabilityLimitIsDetected)
     Sim s(MPI_COMM_WORLD, false);
     ring(s, 30);    // h_S = 0.3
     ::testing::internal::CaptureStdout();
-    std::string what;
-    try {
+    const std::string what = error_from([&] {
       s.cmd("run 667 post no");
-    } catch (LAMMPS_NS::LAMMPSException &e) {
-      what = e.what();
-    }
+    });
     const std::string out = ::testing::internal::GetCapturedStdout();
     EXPECT_THAT(what, ContainsRegex("is unstable at step [0-9]+"));
     EXPECT_THAT(what, ContainsRegex("the coarse step 0.3 \\(slow atoms, the time step\\)"));
@@ -885,12 +876,9 @@ TEST(PEJumpAsync, BufferRemovesTheInterfaceResonanceOfTheWave)
   {
     Sim s;
     wave(s, "");
-    std::string what;
-    try {
+    const std::string what = error_from([&] {
       s.cmd("run 2000 post no");
-    } catch (LAMMPS_NS::LAMMPSException &e) {
-      what = e.what();
-    }
+    });
     EXPECT_THAT(what, ContainsRegex("is unstable at step [0-9]+"));
   }
   {
@@ -929,12 +917,9 @@ TEST(PEJumpAsync, VelocityReversalContinuesBackwardsInTime)
     EXPECT_GT(max_diff(chain_q(s), Q0), 1e-2) << nsteps;    // the chain moved
     for (int i = 0; i < s.lmp->atom->nlocal; ++i)
       for (int k = 0; k < 3; ++k) s.lmp->atom->v[i][k] = -s.lmp->atom->v[i][k];
-    std::string error = "no error";
-    try {
+    const std::string error = error_from([&] {
       s.cmd(fmt::format("run {} post no", nsteps));
-    } catch (LAMMPS_NS::LAMMPSException &e) {
-      error = e.what();
-    }
+    });
     const std::string out = ::testing::internal::GetCapturedStdout();
     EXPECT_EQ(error, "no error") << nsteps;
     EXPECT_THAT(out, ContainsRegex("all velocities were reversed")) << nsteps;
@@ -1602,14 +1587,11 @@ TEST(PEJumpAsync, PseudoEnergyThatClockChangesAddIsWarnedAbout)
     // the changes add up over the runs, to the error
     Sim t;
     lj_liquid(t);
-    std::string stopped = "no error";
-    try {
+    const std::string stopped = error_from([&] {
       t.cmd(fmt::format("timestep {}", h));
       t.cmds(liquid);
       t.cmds({"run 40", "run 120"});
-    } catch (LAMMPS_NS::LAMMPSException &e) {
-      stopped = e.what();
-    }
+    });
     std::smatch at;
     ASSERT_TRUE(std::regex_search(stopped, at, warning)) << stopped;
     EXPECT_GT(std::stoi(at[1]), 40);
