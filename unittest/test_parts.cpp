@@ -3,19 +3,26 @@
 // and restart packing, new atoms at their init values, memory count), the
 // other fixes that the integrators watch for velocity changes, the
 // stability guard's bound on how far atoms moved since the list build, and
-// the node sampler's guard of positions and forces
+// the node sampler's guard of positions and forces, the interaction split
+// and the energy tally of a node evaluated in two parts
 
+#include "force.h"
+#include "group.h"
 #include "neighbor.h"
+#include "pair.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
+#include "pe_jump_interaction_split.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_other_fixes.h"
 #include "pe_jump_quadrature.h"
+#include "pe_jump_split_tally.h"
 #include "pe_jump_stability_guard.h"
 #include "pe_jump_systems.h"
 
 #include "gtest/gtest.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -23,8 +30,10 @@
 using namespace PEJumpTest;
 using LAMMPS_NS::PEJump::AtomState;
 using LAMMPS_NS::PEJump::ForceSampler;
+using LAMMPS_NS::PEJump::InteractionSplit;
 using LAMMPS_NS::PEJump::NodeSampler;
 using LAMMPS_NS::PEJump::OtherFixes;
+using LAMMPS_NS::PEJump::SplitTally;
 using LAMMPS_NS::PEJump::StabilityGuard;
 
 TEST(AtomState, KeepsValuesThroughGrowthCopyAndPacking)
@@ -275,4 +284,52 @@ TEST(NodeSampler, SumInTheCallersKeep)
   for (const int i : listed)
     for (int k = 0; k < 3; ++k) change += fabs(with_own[3 * i + k] - f0[3 * i + k]);
   EXPECT_GT(change, 1e-6);
+}
+
+/* ----------------------------------------------------------------------
+   the interaction split: the FINE subset (pairs and bonds that involve a
+   fine-clock atom) and the COARSE subset (the others) give the complete
+   forces and energy between them, for a pair style and a bond style, and
+   their fractions add up to the whole; the energies that SplitTally adds
+   up from the two evaluations are those of one complete evaluation
+------------------------------------------------------------------------- */
+
+TEST(InteractionSplit, SubsetsAddUpToTheWhole)
+{
+  Sim s;
+  lj_liquid(s, 3);
+  s.cmds({"group fast id 1:30", "displace_atoms all random 0.1 0.1 0.1 4811 units box",
+          "run 0 post no"});
+  auto *lmp = s.lmp;
+  const int nlocal = lmp->atom->nlocal;
+  const int fastbit = lmp->group->bitmask[lmp->group->find("fast")];
+  InteractionSplit split(lmp, 1, fastbit);
+  split.build();
+  EXPECT_NEAR(split.fraction(InteractionSplit::FINE) + split.fraction(InteractionSplit::COARSE),
+              1.0, 1e-12);
+  EXPECT_GT(split.fraction(InteractionSplit::FINE), 0.05);
+
+  ForceSampler sampler(lmp);
+  SplitTally tally(lmp);
+  const auto forces = [&](InteractionSplit::Subset which, int eflag) {
+    if (which != InteractionSplit::ALL) split.activate(which);
+    sampler.compute(ForceSampler::ALL, eflag, 0);
+    split.restore();
+    return std::vector<double>(&lmp->atom->f[0][0], &lmp->atom->f[0][0] + 3 * nlocal);
+  };
+  const auto all = forces(InteractionSplit::ALL, 1);
+  const double energy = lmp->force->pair->eng_vdwl;
+  tally.expect(true);
+  const auto fine = forces(InteractionSplit::FINE, 1);
+  tally.keep();
+  const auto coarse = forces(InteractionSplit::COARSE, 1);
+  tally.add();
+  ASSERT_TRUE(tally.complete());
+  double worst = 0.0, scale = 0.0;
+  for (int n = 0; n < 3 * nlocal; ++n) {
+    worst = std::max(worst, std::fabs(fine[n] + coarse[n] - all[n]));
+    scale = std::max(scale, std::fabs(all[n]));
+  }
+  EXPECT_LT(worst, 1e-12 * scale);
+  EXPECT_NEAR(lmp->force->pair->eng_vdwl, energy, 1e-12 * std::fabs(energy));
 }
