@@ -232,6 +232,7 @@ void FixPEJumpAsync::init()
   others->warn_energy_inside_step(rule->name(), primary_at_end);
   others->warn_langevin_inside_step(rule->name(), primary_at_end);
   split->start_run();
+  tally->init();
   clock_assignment->find_groups();
   split->set_fine_bit(clock_assignment->clock_bit());
   // thermostats drive the parasitic mode on both clocks (see fix pe_jump;

@@ -16,10 +16,14 @@
 #include "angle.h"
 #include "atom.h"
 #include "bond.h"
+#include "compute.h"
 #include "dihedral.h"
 #include "force.h"
 #include "improper.h"
+#include "modify.h"
 #include "pair.h"
+
+#include <cstring>
 
 using namespace LAMMPS_NS;
 using namespace PEJump;
@@ -47,6 +51,16 @@ double *SplitTally::tally(int part) const
     default:
       return (bonded && force->improper) ? &force->improper->energy : nullptr;
   }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void SplitTally::init()
+{
+  usable = true;
+  for (const auto *compute : modify->get_compute_list())
+    for (const char *style : {"pair", "bond", "angle", "dihedral", "improper"})
+      if (strcmp(compute->style, style) == 0) usable = false;
 }
 
 /* ---------------------------------------------------------------------- */

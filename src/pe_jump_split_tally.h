@@ -31,10 +31,15 @@ namespace PEJump {
    public:
     SplitTally(class LAMMPS *lmp) : Pointers(lmp) {}
 
+    // at init: computes that read the tallies of single styles (compute
+    // pair, bond, ...: a sub-style of a hybrid style, a pair style's
+    // pvector) would see one part only, so that beside them nothing is
+    // added up
+    void init();
     // at the step's start
     void expect(bool yes)
     {
-      wanted = yes;
+      wanted = yes && usable;
       held = added = false;
     }
     bool expected() const { return wanted; }
@@ -44,7 +49,7 @@ namespace PEJump {
     bool complete() const { return added; }    // both parts are in the tallies
 
    private:
-    bool wanted = false, held = false, added = false;
+    bool usable = false, wanted = false, held = false, added = false;
     // pair (van der Waals, Coulomb), bond, angle, dihedral, improper
     static constexpr int NPART = 6;
     double energy[NPART] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};

@@ -443,6 +443,36 @@ TEST(PEJumpAsync, LobattoTwoTalliesTheStepEndEnergyFromItsEvaluations)
 }
 
 /* ----------------------------------------------------------------------
+   compute pair reads the tally of one sub-style of a hybrid pair style,
+   which the added-up tallies of the step end do not reach: beside it the
+   energy output of lobatto 2 evaluates everything at the step end again,
+   and the sub-style's energy is that of the output with the virial (it
+   read the coarse interactions' part only, -1.44 for -2.77, before)
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, ComputePairOfAHybridSubStyleSeesAllItsPairs)
+{
+  std::vector<double> sub[2];
+  for (int virial = 0; virial < 2; ++virial) {
+    Sim s;
+    lj_liquid(s);
+    s.cmds({"pair_style hybrid/overlay lj/cut 2.5 soft 1.0", "pair_coeff * * lj/cut 1.0 1.0 2.5",
+            "pair_coeff * * soft 0.5", "region slab block 0 1 INF INF INF INF units lattice",
+            "group fast region slab", "fix 1 all pe_jump/async 5 fast quadrature lobatto 2",
+            "timestep 0.025", "thermo 0", "thermo_style custom step pe",
+            "compute plj all pair lj/cut", "fix e all vector 5 c_plj"});
+    if (virial) s.cmds({"compute p all pressure thermo_temp", "fix p all vector 5 c_p"});
+    s.cmd("run 20 post no");
+    auto *kept = s.lmp->modify->get_fix_by_id("e");
+    for (int n = 0; n < kept->size_vector; ++n) sub[virial].push_back(kept->compute_vector(n));
+  }
+  ASSERT_EQ(sub[0].size(), 5u);
+  ASSERT_EQ(sub[1].size(), 5u);
+  for (size_t n = 0; n < sub[0].size(); ++n)
+    EXPECT_NEAR(sub[0][n], sub[1][n], 1e-12 * std::fabs(sub[1][n])) << n;
+}
+
+/* ----------------------------------------------------------------------
    split runs and restarts at any step (every step ends at a coarse node)
 ------------------------------------------------------------------------- */
 
