@@ -48,6 +48,7 @@
 #include "pe_jump_atom_state.h"
 #include "pe_jump_clock_assignment.h"
 #include "pe_jump_force_sampler.h"
+#include "pe_jump_growth_watch.h"
 #include "pe_jump_interaction_split.h"
 #include "pe_jump_moving_ghosts.h"
 #include "pe_jump_node_sampler.h"
@@ -137,6 +138,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   guard = new StabilityGuard(lmp);
   others = new OtherFixes(lmp, this);
   tally = new PEJump::SplitTally(lmp);
+  growth = new PEJump::GrowthWatch();
   work = new PEJump::WorkForces(lmp, 2);
   state = new AtomState(lmp);
   two_step = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
@@ -198,6 +200,7 @@ FixPEJumpAsync::~FixPEJumpAsync()
   delete state;
   delete work;
   delete tally;
+  delete growth;
   delete others;
   delete guard;
   delete node_sampler;
@@ -339,6 +342,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   grow_work();
   guard->start_run(!watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP) &&
                    !domain->box_change);
+  growth->restart();
   evals->step = 0.0;
   if (!two_step->has_started())
     start_scheme(nullptr, true);
@@ -1204,6 +1208,29 @@ void FixPEJumpAsync::final_integrate()
   const bool ghosts_at_node = node_sampler->step_tallies() || others->step_observed();
   if (ghosts_at_node) classes->label(*split, *clock_assignment, groupbit);
   clock_assignment->evaluate_at_node(update->ntimestep, 1, ghosts_at_node);
+  watch_growth();
+}
+
+/* ----------------------------------------------------------------------
+   a fast group that stays the same: warn once per run if the jumps'
+   share of the kinetic energy grows (a fast group that changes changes
+   the share itself)
+------------------------------------------------------------------------- */
+
+void FixPEJumpAsync::watch_growth()
+{
+  if (clock_assignment->follows_group() || growth->growth() ||
+      (update->ntimestep % PEJump::GrowthWatch::EVERY))
+    return;
+  double e[2];
+  // (not the energies cached for output: fixes after this one may change v)
+  two_step->energies_now(group_atoms(), e);
+  growth->sample(e[0], e[1]);
+  if (growth->growth() && (comm->me == 0))
+    error->warning(FLERR,
+                   "Fix {}: the jump energy's share of the kinetic energy grew from {:.3g} to "
+                   "{:.3g} by step {}: a slow instability of the two clocks",
+                   style, growth->reference_share(), growth->latest_share(), update->ntimestep);
 }
 
 /* ----------------------------------------------------------------------

@@ -35,6 +35,7 @@ namespace PEJump {
   struct Evaluations;
   class ForceSampler;
   struct FreeFlight;
+  class GrowthWatch;
   class InteractionSplit;
   class MovingGhosts;
   class NodeSampler;
@@ -103,6 +104,7 @@ class FixPEJumpAsync : public Fix {
   PEJump::AtomState *state;
   PEJump::TwoStep *two_step;
   PEJump::StabilityGuard *guard;
+  PEJump::GrowthWatch *growth;    // slow growth of the jumps (a warning)
   PEJump::ParasiticDamping *damping;
   PEJump::MovingGhosts *ghosts;
   PEJump::OtherFixes *others;
@@ -180,6 +182,7 @@ class FixPEJumpAsync : public Fix {
   template <bool PRIMARY> void slow_jumps_as(double *mag, double **fcoarse);
   bool finish_check(const double *local);
   std::string instability_advice() const;
+  void watch_growth();
   void slow_magnitudes();
   double node_cost() const;
   void show_classes();    // vector_atom follows the state table

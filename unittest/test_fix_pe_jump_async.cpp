@@ -931,6 +931,34 @@ TEST(PEJumpAsync, BufferRemovesTheInterfaceResonanceOfTheWave)
 }
 
 /* ----------------------------------------------------------------------
+   a weak resonance of the clocks (the wave at h_S = 0.5 dx, K = 20: the
+   amplitude grows 0.66 % per coarse step, the guard stops the run at
+   coarse step 2508) is warned of while the run goes on; the stable
+   neighbour K = 10 stays silent
+------------------------------------------------------------------------- */
+
+TEST(PEJumpAsync, SlowGrowthOfTheJumpsIsWarnedBeforeTheRunStops)
+{
+  constexpr int N = 250;
+  auto wave_output = [](int K, int steps) {
+    Sim s(MPI_COMM_WORLD, false);
+    inhomogeneous_wave(s, N);
+    s.cmds({fmt::format("fix 1 chain pe_jump/async {} fast", K),
+            fmt::format("timestep {:.17g}", 0.5 / N), "thermo 1000"});
+    ::testing::internal::CaptureStdout();
+    s.cmd(fmt::format("run {} post no", steps));
+    return ::testing::internal::GetCapturedStdout();
+  };
+  const std::string resonant = wave_output(20, 2400);
+  EXPECT_THAT(resonant,
+              ContainsRegex("WARNING: Fix pe_jump/async: the jump energy's share of the "
+                            "kinetic energy grew from 0\\.0[0-9]+ to 0\\.[1-9][0-9]* by "
+                            "step 2[0-3][0-9]0: a slow instability"));
+  const std::string stable = wave_output(10, 4000);
+  EXPECT_THAT(stable, Not(ContainsRegex("share of the kinetic energy")));
+}
+
+/* ----------------------------------------------------------------------
    reversing all velocities after a run (which ends at a coarse node,
    where every atom has its node velocity) continues backwards in time:
    as many steps again bring the chain back to its start

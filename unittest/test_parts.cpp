@@ -12,6 +12,7 @@
 #include "pair.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_force_sampler.h"
+#include "pe_jump_growth_watch.h"
 #include "pe_jump_interaction_split.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_other_fixes.h"
@@ -30,6 +31,7 @@
 using namespace PEJumpTest;
 using LAMMPS_NS::PEJump::AtomState;
 using LAMMPS_NS::PEJump::ForceSampler;
+using LAMMPS_NS::PEJump::GrowthWatch;
 using LAMMPS_NS::PEJump::InteractionSplit;
 using LAMMPS_NS::PEJump::NodeSampler;
 using LAMMPS_NS::PEJump::OtherFixes;
@@ -332,4 +334,46 @@ TEST(InteractionSplit, SubsetsAddUpToTheWhole)
   }
   EXPECT_LT(worst, 1e-12 * scale);
   EXPECT_NEAR(lmp->force->pair->eng_vdwl, energy, 1e-12 * std::fabs(energy));
+}
+
+/* ----------------------------------------------------------------------
+   the growth watch: a share that holds (after the first window, where
+   the jumps build up) is silent; a share that grows by 1.6 per window is
+   caught once it is above MIN_SHARE and FACTOR times the share LAG
+   windows back; a share that stays below MIN_SHARE is silent however it
+   grows
+------------------------------------------------------------------------- */
+
+TEST(GrowthWatch, CatchesASustainedGrowthOfTheJumpShareOnly)
+{
+  // one window of samples with jump energy j and pseudo-kinetic energy
+  // 1 - j (their sum, the kinetic energy, is 1): the window's share is j
+  auto window = [](GrowthWatch &w, double j) {
+    for (int n = 0; n < GrowthWatch::WINDOW; n++) w.sample(1.0 - j, j);
+  };
+  GrowthWatch held;
+  window(held, 0.001);    // the first window is no reference
+  for (int k = 0; k < 40; k++) window(held, (k % 2) ? 0.07 : 0.09);
+  EXPECT_FALSE(held.growth());
+
+  GrowthWatch growing;
+  window(growing, 0.05);
+  double share = 0.05;
+  int caught = -1;
+  for (int k = 1; (k < 20) && (caught < 0); k++) {
+    window(growing, share);
+    if (growing.growth()) caught = k;
+    share *= 1.6;
+  }
+  // windows 1, 2, 3 hold 0.05, 0.08, 0.128: window 3 is the first above
+  // 0.1 and above 2 x window 1 (LAG = 2 windows back)
+  EXPECT_EQ(caught, 3);
+  EXPECT_NEAR(growing.latest_share(), 0.128, 1e-12);
+  EXPECT_NEAR(growing.reference_share(), 0.05, 1e-12);
+
+  GrowthWatch small;
+  share = 1e-4;
+  for (int k = 0; k < 12; k++, share *= 1.6) window(small, share);
+  EXPECT_LT(small.latest_share(), GrowthWatch::MIN_SHARE);
+  EXPECT_FALSE(small.growth());
 }
