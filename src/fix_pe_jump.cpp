@@ -967,19 +967,8 @@ void FixPEJump::check_excursion(double lo, double hi)
 
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
   guard->step(h_step);
-  if (guard->has_stats()) {
-    local[1] = h_step * h_step * guard->speed2();
-    local[2] = h_step * h_step * guard->jump2();
-    local[3] = guard->jump2();
-    local[4] = guard->speed2();
-    if (xhold)
-      local[0] = guard->excursion_since(group_atoms(), free_flight(), xhold, lo, hi);
-    else
-      guard->forget_reach();
-  } else {
-    const StabilityGuard::Nodes at{h_step, lo, hi};
-    guard->measure(group_atoms(), free_flight(), two_step->jump(), xhold, at, local);
-  }
+  guard->step_measures(group_atoms(), free_flight(), two_step->jump(), xhold, {h_step, lo, hi},
+                       local);
   finish_check(local);
 }
 

@@ -983,32 +983,13 @@ bool FixPEJumpAsync::check_fine_nodes(double into)
   double **xhold = neighbor->dist_check ? neighbor->get_xhold() : nullptr;
   double local[StabilityGuard::NMEASURES] = {0.0, 0.0, 0.0, 0.0, 0.0};
   guard->step(h);
-  if (guard->has_stats()) {
-    // speeds and jumps as the last fine step and coarse node left them;
-    // distances only where the moving atoms can have come near half the
-    // skin since they were last measured
-    const double coarse = clocks->coarse_step();
-    local[1] = MAX(h * h * guard->speed2(), coarse * coarse * guard->slow_speed2());
-    local[2] = MAX(h * h * guard->jump2(), coarse * coarse * guard->slow_jump2());
-    local[3] = MAX(guard->jump2(), guard->slow_jump2());
-    local[4] = MAX(guard->speed2(), guard->slow_speed2());
-    if (xhold)
-      local[0] = guard->excursion_since(group_atoms(&clock_assignment->moving_atoms), free_flight(),
-                                        xhold, lo, hi);
-    else
-      guard->forget_reach();
-  } else {
-    const StabilityGuard::Nodes at{h, lo, hi};
-    guard->measure(group_atoms(&clock_assignment->moving_atoms), free_flight(), two_step->jump(),
-                   xhold, at, local);
-    // the slow atoms' speeds and jumps as the coarse node left them (the
-    // reference of the jumps' growth holds both clocks)
-    const double coarse = clocks->coarse_step();
-    local[1] = MAX(local[1], coarse * coarse * guard->slow_speed2());
-    local[2] = MAX(local[2], coarse * coarse * guard->slow_jump2());
-    local[3] = MAX(local[3], guard->slow_jump2());
-    local[4] = MAX(local[4], guard->slow_speed2());
-  }
+  // speeds and jumps as the last fine step and coarse node left them (the
+  // reference of the jumps' growth holds both clocks); distances only where
+  // the moving atoms can have come near half the skin since they were last
+  // measured
+  guard->step_measures(group_atoms(&clock_assignment->moving_atoms), free_flight(),
+                       two_step->jump(), xhold, {h, lo, hi}, local);
+  guard->join_slow_stats(clocks->coarse_step(), local);
   return finish_check(local);
 }
 

@@ -80,6 +80,42 @@ void StabilityGuard::set_slow_stats(double vv, double jj)
 
 /* ---------------------------------------------------------------------- */
 
+void StabilityGuard::step_measures(const AtomSet &set, const FreeFlight &vel, double **jump,
+                                   double **xhold, const Nodes &at, double *local)
+{
+  if (!has_stats()) {
+    measure(set, vel, jump, xhold, at, local);
+    return;
+  }
+  measures_from_stats(at.h, local);
+  if (xhold)
+    local[0] = excursion_since(set, vel, xhold, at.lo, at.hi);
+  else
+    forget_reach();
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StabilityGuard::measures_from_stats(double h, double *local) const
+{
+  local[1] = h * h * stats[0];
+  local[2] = h * h * stats[1];
+  local[3] = stats[1];
+  local[4] = stats[0];
+}
+
+/* ---------------------------------------------------------------------- */
+
+void StabilityGuard::join_slow_stats(double coarse, double *local) const
+{
+  local[1] = MAX(local[1], coarse * coarse * slow[0]);
+  local[2] = MAX(local[2], coarse * coarse * slow[1]);
+  local[3] = MAX(local[3], slow[1]);
+  local[4] = MAX(local[4], slow[0]);
+}
+
+/* ---------------------------------------------------------------------- */
+
 void StabilityGuard::measure(const AtomSet &set, const FreeFlight &vel, double **jump,
                              double **xhold, const Nodes &at, double *local) const
 {

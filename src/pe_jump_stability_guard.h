@@ -53,13 +53,11 @@ namespace PEJump {
       reach.forget();
     }
     bool has_stats() const { return valid; }
-    double speed2() const { return stats[0]; }
-    double jump2() const { return stats[1]; }
     // the same for the atoms on a coarse clock (pe_jump/async), whose
-    // velocities change only at coarse nodes
+    // velocities change only at coarse nodes; joined into local[1..4] for
+    // the coarse step
     void set_slow_stats(double vv, double jj);
-    double slow_speed2() const { return slow[0]; }
-    double slow_jump2() const { return slow[1]; }
+    void join_slow_stats(double coarse, double *local) const;
 
     // the measures of the atoms of set from their state, for steps of size
     // h: nodes at t in [lo, hi] from where the atoms are
@@ -68,6 +66,11 @@ namespace PEJump {
     };
     void measure(const AtomSet &, const FreeFlight &, double **jump, double **xhold, const Nodes &,
                  double *local) const;
+    // the measures of a step: where the last step left stats, speeds and
+    // jumps from them and distances (excursion_since()) only if xhold,
+    // else measure()
+    void step_measures(const AtomSet &, const FreeFlight &, double **jump, double **xhold,
+                       const Nodes &, double *local);
 
     // the same for one atom at x (xhold its build position or null) moving
     // with vhalf
@@ -136,6 +139,8 @@ namespace PEJump {
                   const std::function<std::string()> &advice);
 
    private:
+    // local[1..4] (the layout of measure()) from the stats, for steps of size h
+    void measures_from_stats(double h, double *local) const;
     double stats[2], slow[2];
     bool valid;
     double jump_ref;    // largest |[v]|^2 or |v|^2 of the first steps of the run
