@@ -35,6 +35,7 @@
 #include "pair.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_auto_quadrature.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_node_sampler.h"
 #include "pe_jump_options.h"
@@ -211,8 +212,8 @@ void FixPEJump::refuse_atoms_outside_include_group() const
   if (outside > 0)
     error->all(FLERR,
                "Fix {} moves every atom of its group every step, but {} of them are not in the "
-               "neigh_modify include group {}. Remove neigh_modify include",
-               style, outside, group->names[neighbor->includegroup]);
+               "neigh_modify include group {}{}",
+               style, outside, group->names[neighbor->includegroup], PEJump::errorurl(5));
 }
 
 /* ---------------------------------------------------------------------- */
@@ -253,7 +254,8 @@ void FixPEJump::init()
   check_others_for_rule();
   if (auto_quadrature) auto_quadrature->check_compute(style);
   if (present && !(opts->sample_mask & present) && (comm->me == 0))
-    error->warning(FLERR, "Fix {} samples none of the force contributions present", style);
+    error->warning(FLERR, "Fix {} samples none of the force contributions present{}", style,
+                   PEJump::errorurl(17));
 }
 
 /* ----------------------------------------------------------------------
@@ -265,14 +267,14 @@ void FixPEJump::refuse_step_counters() const
 {
   for (const auto &ifix : modify->get_fix_list()) {
     if (utils::strmatch(ifix->style, "^dt/reset"))
-      error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them",
-                 style, ifix->id, ifix->style);
+      error->all(FLERR, "Fix {} adapt and fix {} ({}) both set the time step: use one of them{}",
+                 style, ifix->id, ifix->style, PEJump::errorurl(35));
     // (fix nve with fix dt/reset has the same problem in LAMMPS)
     if (utils::strmatch(ifix->style, "^deform"))
       error->all(FLERR,
                  "Fix {} adapt changes the time step, but fix {} ({}) changes the box by the step "
-                 "count. Use a fixed time step with fix deform",
-                 style, ifix->id, ifix->style);
+                 "count{}",
+                 style, ifix->id, ifix->style, PEJump::errorurl(36));
   }
 }
 
@@ -291,11 +293,7 @@ void FixPEJump::check_others_for_rule() const
   others->warn_langevin_inside_step(rule->name(), primary_at_end);
   if (!primary_at_end)
     node_sampler->refuse_step_end_side_effects(
-        style,
-        fmt::format("with quadrature {} this fix evaluates the force field at the "
-                    "primary node inside the step and again at the step end on steps "
-                    "that tally energy or virial or dump forces",
-                    rule->name()));
+        style, fmt::format("with quadrature {} output steps have two evaluations", rule->name()));
 }
 
 /* ----------------------------------------------------------------------
@@ -1013,18 +1011,15 @@ std::string FixPEJump::instability_advice() const
   // taken as an impulse beside the jump; the rules with interior nodes can
   // grow on many of them, lobatto 2 takes them as velocity Verlet does
   const std::string reversing = rule->only_end_nodes() ? std::string() : others->reversing_fixes();
-  return fmt::format("The time step {} is beyond the stability limit of the fastest motion (for "
-                     "masses m joined by springs of stiffness k in a chain, dt < sqrt(m/k); "
-                     "bond_style harmonic has k = 2K): {}{}",
-                     h_step,
-                     step_control->adapts() ? "lower the adapt dtmin or eps"
-                                            : "reduce it, or use the adapt keyword",
-                     reversing.empty()
-                         ? ""
-                         : fmt::format(". Velocities reversed by {} can also make the scheme "
-                                       "grow with this rule: use quadrature lobatto 2, which "
-                                       "takes them as fix nve does",
-                                       reversing));
+  return fmt::format(
+      "The time step {} is beyond the stability limit of the fastest motion: {}{}{}", h_step,
+      step_control->adapts() ? "lower the adapt dtmin or eps"
+                             : "reduce it, or use the adapt keyword",
+      reversing.empty() ? ""
+                        : fmt::format(". Velocities reversed by {} can also make the scheme "
+                                      "grow with this rule: use quadrature lobatto 2",
+                                      reversing),
+      PEJump::errorurl(1));
 }
 
 /* ----------------------------------------------------------------------
@@ -1242,7 +1237,8 @@ void FixPEJump::restart(char *buf)
 {
   auto *list = reinterpret_cast<double *>(buf);
   if (static_cast<int>(list[FORMAT]) != RESTART_FORMAT)
-    error->all(FLERR, "Fix {}: the restart file has another layout of the fix's state", style);
+    error->all(FLERR, "Fix {}: the restart file has another layout of the fix's state{}", style,
+               PEJump::errorurl(14));
   const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
       (static_cast<int>(list[POINTS]) == rule->points());
   const int head = static_cast<int>(list[HEAD]);

@@ -47,6 +47,7 @@
 #include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_clock_assignment.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_growth_watch.h"
 #include "pe_jump_interaction_split.h"
@@ -126,10 +127,11 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   if (group->dynamic[igroup])
     error->all(FLERR,
                "Fix pe_jump/async does not allow a dynamic fix group ({}): the fast group may "
-               "be dynamic, the fix group must not",
-               group->names[igroup]);
+               "be dynamic, the fix group must not{}",
+               group->names[igroup], PEJump::errorurl(56));
   if (group->find(arg[4]) < 0)
-    error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", arg[4]);
+    error->all(FLERR, "Fix pe_jump/async fast group {} does not exist{}", arg[4],
+               PEJump::errorurl(57));
   refuse_keywords();
 
   rule = new Quadrature(static_cast<Quadrature::Family>(opts->family), opts->npoints);
@@ -219,16 +221,14 @@ void FixPEJumpAsync::init()
   refuse_unsplittable();
   refuse_other_fixes();
   node_sampler->refuse_step_end_side_effects(
-      style,
-      "on steps that tally energy or virial or dump forces this fix evaluates every "
-      "interaction at the end of the coarse step");
+      style, "on steps that tally energy the fine interactions are evaluated twice");
   // the lists of the fine interactions and those of the slow atoms are
   // both taken from LAMMPS' lists
   if (neighbor->includegroup)
     error->all(FLERR,
                "Fix {} does not support neigh_modify include: the neighbor lists must hold the "
-               "pairs of every atom",
-               style);
+               "pairs of every atom{}",
+               style, PEJump::errorurl(6));
   const bool primary_at_end = (rule->node[rule->primary()] == 1.0);
   others->refuse_for_rule(rule->name(), primary_at_end, rule->only_end_nodes());
   others->warn_step_number(rule->name(), primary_at_end, rule->only_end_nodes());
@@ -396,7 +396,7 @@ void FixPEJumpAsync::refuse_keywords() const
   if (opts->adapt_eps > 0.0)
     error->all(FLERR,
                "Fix pe_jump/async does not support the adapt keyword: the coarse and fine "
-               "steps are fixed (use fix pe_jump for adaptive steps)");
+               "steps are fixed");
   if (opts->auto_tol > 0.0)
     error->all(FLERR, "Fix pe_jump/async does not support quadrature auto: choose a fixed rule");
   if (opts->compensate > 0)
@@ -432,27 +432,26 @@ void FixPEJumpAsync::refuse_unsplittable() const
   if (force->pair && force->pair->manybody_flag)
     error->all(FLERR,
                "Fix pe_jump/async cannot split the many-body pair style {} into slow and fast "
-               "interactions: use fix pe_jump",
-               force->pair_style);
+               "interactions: use fix pe_jump{}",
+               force->pair_style, PEJump::errorurl(47));
   if (force->kspace)
     error->all(FLERR,
                "Fix pe_jump/async cannot split k-space ({}) into slow and fast interactions: "
-               "use fix pe_jump",
-               force->kspace_style);
+               "use fix pe_jump{}",
+               force->kspace_style, PEJump::errorurl(48));
   if (atom->peri_flag)
     error->all(FLERR,
-               "Fix pe_jump/async cannot split peridynamic interactions (atom style {}): their "
-               "bonds are kept in partner lists of the pair style, not in the neighbor lists. Use "
-               "fix pe_jump",
-               atom->atom_style);
+               "Fix pe_jump/async cannot split peridynamic interactions (atom style {}): use fix "
+               "pe_jump{}",
+               atom->atom_style, PEJump::errorurl(49));
   // a bond style whose bonds can break (partial_flag) changes the topology
   // and may keep data per entry of the bond list, whose order the split
   // changes
   if (force->bond && force->bond->partial_flag && (atom->molecular != Atom::ATOMIC))
     error->all(FLERR,
                "Fix pe_jump/async cannot split bond style {}: its bonds can break, and the split "
-               "reorders the bond list. Use fix pe_jump",
-               force->bond_style);
+               "reorders the bond list. Use fix pe_jump{}",
+               force->bond_style, PEJump::errorurl(50));
 }
 
 /* ----------------------------------------------------------------------
@@ -470,8 +469,8 @@ void FixPEJumpAsync::refuse_other_fixes() const
     if ((ifix != this) && ifix->time_integrate)
       error->all(FLERR,
                  "Fix pe_jump/async must be the only time integration fix (found fix {} {}): "
-                 "atoms outside its group are frozen scenery",
-                 ifix->id, ifix->style);
+                 "atoms outside its group are frozen scenery{}",
+                 ifix->id, ifix->style, PEJump::errorurl(40));
 
   // a force field that changes during the run (fix adapt) would be sampled
   // at the fine and the coarse nodes at other times than theirs; fixes that
@@ -483,19 +482,19 @@ void FixPEJumpAsync::refuse_other_fixes() const
         (adapts || (ifix->setmask() & INITIAL_INTEGRATE)))
       error->all(FLERR,
                  "Fix pe_jump/async cannot yet be combined with fix {} ({}), which {}. Use fix "
-                 "pe_jump",
+                 "pe_jump{}",
                  ifix->id, ifix->style,
-                 adapts ? "changes the force field during the run: the fine and the coarse forces "
-                          "are sampled at different times"
-                        : "acts on the atoms in initial_integrate, where the fine steps begin");
+                 adapts ? "changes the force field during the run"
+                        : "acts on the atoms in initial_integrate",
+                 adapts ? PEJump::errorurl(41) : PEJump::errorurl(42));
   }
   // fix deform with remap v changes the velocity of an atom that crosses a
   // periodic boundary inside its step
   if (domain->deform_vremap)
     error->all(FLERR,
                "Fix pe_jump/async cannot yet be combined with fix deform with remap v, which "
-               "changes the velocities of atoms that cross a periodic boundary. Use remap x, or "
-               "fix pe_jump");
+               "changes velocities at periodic boundaries{}",
+               PEJump::errorurl(43));
 
   // velocities reversed inside the step (at the primary coarse node, where
   // the atoms on the fine clock are inside a fine step), and atoms inserted
@@ -505,14 +504,13 @@ void FixPEJumpAsync::refuse_other_fixes() const
     if (OtherFixes::reverses_velocities(ifix))
       error->all(FLERR,
                  "Fix pe_jump/async cannot yet be combined with fix {} ({}), which reverses "
-                 "velocities inside the coarse step. Use fix pe_jump, or a wall that exerts a "
-                 "force (fix wall/lj93, ...)",
-                 ifix->id, ifix->style);
+                 "velocities inside the coarse step{}",
+                 ifix->id, ifix->style, PEJump::errorurl(44));
     if (OtherFixes::inserted_bits(ifix))
       error->all(FLERR,
                  "Fix pe_jump/async cannot yet be combined with fix {} ({}), which inserts atoms "
-                 "inside the coarse step. Use fix pe_jump",
-                 ifix->id, ifix->style);
+                 "inside the coarse step. Use fix pe_jump{}",
+                 ifix->id, ifix->style, PEJump::errorurl(45));
   }
 }
 
@@ -534,8 +532,8 @@ void FixPEJumpAsync::refuse_velocity_changes()
   if (any)
     error->all(FLERR,
                "Fix pe_jump/async: another fix changed velocities inside the coarse step of step "
-               "{}; pe_jump/async takes velocity changes between steps only. Use fix pe_jump",
-               update->ntimestep);
+               "{}{}",
+               update->ntimestep, PEJump::errorurl(46));
 }
 
 /* ----------------------------------------------------------------------
@@ -549,23 +547,23 @@ void FixPEJumpAsync::refuse_pair_misfit() const
   if (fit == InteractionSplit::OFF_LISTS)
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: it computes forces that are not in "
-               "its neighbor lists (e.g. from partner lists of its own). Use fix pe_jump",
-               force->pair_style);
+               "its neighbor lists{}",
+               force->pair_style, PEJump::errorurl(51));
   if (fit == InteractionSplit::OFF_PAIRS)
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: the force of a pair acts on other "
-               "atoms than the two of the pair. Use fix pe_jump",
-               force->pair_style);
+               "atoms than the two of the pair{}",
+               force->pair_style, PEJump::errorurl(52));
   if (fit == InteractionSplit::NOT_ADDITIVE)
     error->all(FLERR,
                "Fix pe_jump/async cannot split pair style {}: the force of two pairs of an atom is "
-               "not the sum of the forces of each. Use fix pe_jump",
-               force->pair_style);
+               "not the sum of the forces of each{}",
+               force->pair_style, PEJump::errorurl(53));
   if (fit == InteractionSplit::ON_TIME)
     error->all(FLERR,
                "Fix pe_jump/async cannot take pair style {}: its forces depend on the time or the "
-               "step. Use fix pe_jump",
-               force->pair_style);
+               "step. Use fix pe_jump{}",
+               force->pair_style, PEJump::errorurl(54));
 }
 
 /* ----------------------------------------------------------------------
@@ -1590,14 +1588,12 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 
 std::string FixPEJumpAsync::instability_advice() const
 {
-  return fmt::format(
-      "The fine step {} (fast and mixed atoms), the coarse step {} (slow atoms, the time step), "
-      "or their coupling at the interface, which has resonances (see the stability section of "
-      "the fix pe_jump/async documentation), is unstable: reduce the time step or change K{}",
-      update->dt / clocks->steps(), update->dt,
-      opts->buffer_layers ? ""
-                          : ", or add the keyword buffer 1 (the slow partners of the interface "
-                            "then take the fine step)");
+  return fmt::format("The fine step {} (fast and mixed atoms), the coarse step {} (slow atoms, the "
+                     "time step), or their coupling at the interface is unstable: reduce the "
+                     "time step or change K{}{}",
+                     update->dt / clocks->steps(), update->dt,
+                     opts->buffer_layers ? "" : ", or add the keyword buffer 1",
+                     PEJump::errorurl(2));
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1658,7 +1654,8 @@ void FixPEJumpAsync::restart(char *buf)
 {
   auto *list = reinterpret_cast<double *>(buf);
   if (static_cast<int>(list[FORMAT]) != RESTART_FORMAT)
-    error->all(FLERR, "Fix {}: the restart file has another layout of the fix's state", style);
+    error->all(FLERR, "Fix {}: the restart file has another layout of the fix's state{}", style,
+               PEJump::errorurl(14));
   const bool same_rule = (static_cast<int>(list[FAMILY]) == rule->family()) &&
       (static_cast<int>(list[POINTS]) == rule->points());
   const int head = static_cast<int>(list[HEAD]);

@@ -19,6 +19,7 @@
 #include "error.h"
 #include "memory.h"
 #include "modify.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_node_sampler.h"
 #include "update.h"
@@ -57,7 +58,7 @@ void AutoQuadrature::create_compute()
 void AutoQuadrature::check_compute(const char *style) const
 {
   if (!modify->get_compute_by_id(id_pe))
-    error->all(FLERR, "Fix {}: compute {} was deleted", style, id_pe);
+    error->all(FLERR, "Fix {}: compute {} was deleted{}", style, id_pe, errorurl(16));
 }
 
 /* ---------------------------------------------------------------------- */

@@ -24,6 +24,7 @@
 #include "neighbor.h"
 #include "output.h"
 #include "pe_jump_atom_state.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_interaction_split.h"
 #include "update.h"
 
@@ -50,7 +51,8 @@ ClockAssignment::ClockAssignment(LAMMPS *lmp, Fix *owner, const char *fast, Buff
     reverse_flags(nullptr)
 {
   const int ifast = group->find(fast_group);
-  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async fast group {} does not exist", fast_group);
+  if (ifast < 0)
+    error->all(FLERR, "Fix pe_jump/async fast group {} does not exist{}", fast_group, errorurl(57));
   finebit = clockbit = group->bitmask[ifast];    // own clock group: see find_groups()
   dynamic = group->dynamic[ifast] != 0;
 }
@@ -62,9 +64,9 @@ void ClockAssignment::warn_if_made_static()
   if (file_dynamic && !dynamic && (comm->me == 0))
     error->warning(
         FLERR,
-        "Fix pe_jump/async: the fast group was dynamic when the restart file was written; "
-        "read_restart restores it as static: give its group dynamic command ({}) again",
-        fast_group);
+        "Fix pe_jump/async: the fast group {} was dynamic when the restart file was written, "
+        "and read_restart restored it as static{}",
+        fast_group, errorurl(63));
   file_dynamic = false;
 }
 
@@ -115,19 +117,21 @@ void ClockAssignment::delete_clock_group() const
 void ClockAssignment::find_groups()
 {
   const int ifast = group->find(fast_group);
-  if (ifast < 0) error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted", fast_group);
+  if (ifast < 0)
+    error->all(FLERR, "Fix pe_jump/async: its fast group {} was deleted{}", fast_group,
+               errorurl(58));
   finebit = group->bitmask[ifast];
   clockbit = finebit;
   if ((group->dynamic[ifast] != 0) != dynamic)
     error->all(FLERR,
-               "Fix pe_jump/async: its fast group {} was made {} after the fix was defined: "
-               "define the fix again (unfix, fix) after the group",
-               fast_group, dynamic ? "static" : "dynamic");
+               "Fix pe_jump/async: its fast group {} was made {} after the fix was defined{}",
+               fast_group, dynamic ? "static" : "dynamic", errorurl(60));
   if (own_group()) {
     const std::string clock_group = std::string(fix->id) + "_fine_clock";
     const int iclock = group->find(clock_group);
     if (iclock < 0)
-      error->all(FLERR, "Fix pe_jump/async: its fine-clock group {} was deleted", clock_group);
+      error->all(FLERR, "Fix pe_jump/async: its fine-clock group {} was deleted{}", clock_group,
+                 errorurl(59));
     clockbit = group->bitmask[iclock];
   }
 
@@ -147,10 +151,11 @@ void ClockAssignment::find_groups()
   bigint global[2];
   MPI_Allreduce(local, global, 2, MPI_LMP_BIGINT, MPI_SUM, world);
   if (global[1] > 0)
-    error->all(FLERR, "Fix pe_jump/async: {} atoms of the fast group are not in the fix group {}",
-               global[1], group->names[fix->igroup]);
+    error->all(FLERR, "Fix pe_jump/async: {} atoms of the fast group are not in the fix group {}{}",
+               global[1], group->names[fix->igroup], errorurl(61));
   if ((global[0] == 0) && !fast_auto)
-    error->all(FLERR, "Fix pe_jump/async: the fast group has no atoms in the fix group");
+    error->all(FLERR, "Fix pe_jump/async: the fast group has no atoms in the fix group{}",
+               errorurl(62));
 }
 
 /* ----------------------------------------------------------------------
@@ -331,20 +336,16 @@ void ClockAssignment::add_change_energy(double dh, const std::function<double()>
   const double scale = MAX(changes.kinetic, kinetic());
   // (a group at rest has nothing to compare with)
   if ((scale <= 0.0) || (added <= CHANGE_ENERGY_WARN * scale)) return;
-  const std::string what = fmt::format(
-      "Fix {}: by step {} the clock changes since the fix was defined have changed the "
-      "pseudo-energy by {:.8g}, {:.3g} % of the kinetic energy of the group ({:.8g}): an atom "
-      "that changes clock restarts its jump, and atoms that change clock often add this up. "
-      "Reduce the coarse step (K or the time step), or put the atoms that change clock into the "
-      "fast group or its buffer{}",
-      style, update->ntimestep, changes.energy, 100.0 * added / scale, scale,
-      fast_auto ? ", or raise the tolerance of fast auto" : "");
+  const std::string what =
+      fmt::format("Fix {}: by step {} the clock changes since the fix was defined have changed the "
+                  "pseudo-energy by {:.8g}, {:.3g} % of the kinetic energy of the group ({:.8g})",
+                  style, update->ntimestep, changes.energy, 100.0 * added / scale, scale);
   if (added > CHANGE_ENERGY_STOP * scale)
-    error->all(FLERR, "{}; the fix stops where this exceeds {} %", what,
-               100.0 * CHANGE_ENERGY_STOP);
+    error->all(FLERR, "{}; the fix stops where this exceeds {} %{}", what,
+               100.0 * CHANGE_ENERGY_STOP, errorurl(64));
   if (changes.warned) return;
   changes.warned = true;
-  if (comm->me == 0) error->warning(FLERR, what);
+  if (comm->me == 0) error->warning(FLERR, what + errorurl(64));
 }
 
 /* ----------------------------------------------------------------------

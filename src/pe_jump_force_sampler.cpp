@@ -26,6 +26,7 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_moving_ghosts.h"
 #include "timer.h"
 #include "utils.h"
@@ -77,8 +78,8 @@ void ForceSampler::refuse_velocity_forces(const char *style, const std::string &
   if (!comm->ghost_velocity || end_nodes) return;
   error->all(FLERR,
              "Fix {} with quadrature {}: comm_modify vel yes is set (forces that depend on "
-             "velocities grow the jumps). Use quadrature lobatto 2, fix nve, or comm_modify vel no",
-             style, rule);
+             "velocities grow the jumps){}",
+             style, rule, errorurl(31));
 }
 
 /* ----------------------------------------------------------------------
@@ -94,9 +95,8 @@ void ForceSampler::refuse_stateful_forces(const char *style, const std::string &
   if (!atom->peri_flag || end_nodes) return;
   error->all(FLERR,
              "Fix {} with quadrature {}: pair style {} advances the state of its bonds at every "
-             "force evaluation, and this rule evaluates more than once per step. Use quadrature "
-             "lobatto 2 or fix nve",
-             style, rule, force->pair_style);
+             "force evaluation{}",
+             style, rule, force->pair_style, errorurl(32));
 }
 
 /* ---------------------------------------------------------------------- */
@@ -127,8 +127,9 @@ void ForceSampler::set_hooks(const std::vector<Fix *> &prepare, const std::vecto
 #if !defined(LMP_OPENMP)
   if (omp && (comm->nthreads > 1))
     error->all(FLERR,
-               "Fix pe_jump was built without the OPENMP package and cannot reduce the "
-               "forces of several OpenMP threads: rebuild it with PKG_OPENMP or use 1 thread");
+               "PE-JUMP was built without the OPENMP package and cannot reduce the forces of "
+               "several OpenMP threads{}",
+               errorurl(15));
 #endif
 }
 

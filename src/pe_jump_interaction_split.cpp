@@ -19,6 +19,7 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "pe_jump_errors.h"
 #include "update.h"
 #include "utils.h"
 
@@ -167,8 +168,8 @@ void InteractionSplit::check_topology() const
   if (topology_count() != topology)
     error->all(FLERR,
                "Fix pe_jump/async: the bonds, angles, dihedrals or impropers changed during the "
-               "run (from {} to {}). Use fix pe_jump",
-               topology, topology_count());
+               "run (from {} to {}). Use fix pe_jump{}",
+               topology, topology_count(), errorurl(55));
 }
 
 /* ---------------------------------------------------------------------- */

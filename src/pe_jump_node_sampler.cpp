@@ -23,6 +23,7 @@
 #include "memory.h"
 #include "modify.h"
 #include "output.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_quadrature.h"
 #include "update.h"
@@ -301,21 +302,17 @@ bool NodeSampler::forces_dumped() const
 
 void NodeSampler::refuse_step_end_side_effects(const char *style, const std::string &why) const
 {
-  const std::string other = utils::strmatch(style, "async") ? "" : ", or a Lobatto rule";
   for (auto *compute : modify->get_compute_list())
     if (utils::strmatch(compute->style, "/tally$"))
       error->all(FLERR,
                  "Fix {}: compute {} ({}) adds up the pair tallies of every force evaluation "
-                 "in a step, and {}, so it would count pairs twice. Use compute pair, pe/atom, "
-                 "stress/atom or group/group instead{}",
-                 style, compute->id, compute->style, why, other);
+                 "in a step, and {}{}",
+                 style, compute->id, compute->style, why, errorurl(34));
   // (peridynamic bonds are refused before, ForceSampler::refuse_stateful_forces)
   if (force->bond && force->bond->partial_flag)
     error->all(FLERR,
-               "Fix {}: the bonds of bond style {} break inside the force evaluation, and {}, so "
-               "output would break bonds that a run without output keeps. Use quadrature "
-               "lobatto 2 or 3",
-               style, force->bond_style, why);
+               "Fix {}: the bonds of bond style {} break inside the force evaluation, and {}{}",
+               style, force->bond_style, why, errorurl(33));
 }
 
 /* ---------------------------------------------------------------------- */

@@ -22,6 +22,7 @@
 #include "neighbor.h"
 #include "output.h"
 #include "pair.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_force_sampler.h"
 #include "pe_jump_step_variables.h"
 #include "update.h"
@@ -108,16 +109,14 @@ void OtherFixes::sort(ForceSampler &sampler)
       continue;
     }
     if (ifix->dof_flag)
-      error->all(FLERR,
-                 "Fix {} cannot be combined with the constraints of fix {} ({}): they assume the "
-                 "velocity Verlet update of fix nve. Use fix nve, or remove the constraints",
-                 self->style, ifix->id, ifix->style);
+      error->all(FLERR, "Fix {} cannot be combined with the constraints of fix {} ({}){}",
+                 self->style, ifix->id, ifix->style, errorurl(24));
     // of the langevin fixes only the GJF variant acts before the step
     if (is(ifix, LANGEVIN) && (mask & INITIAL_INTEGRATE))
       error->all(FLERR,
                  "Fix {} cannot be combined with fix {} ({}) with keyword gjf. Use fix langevin "
-                 "without gjf, or fix nve",
-                 self->style, ifix->id, ifix->style);
+                 "without gjf, or fix nve{}",
+                 self->style, ifix->id, ifix->style, errorurl(25));
     // a thermostat anywhere in the system: the run does not conserve energy
     if (ifix->ecouple_flag || is(ifix, TTM)) {
       ++nthermostats;
@@ -152,12 +151,9 @@ void OtherFixes::warn_energy_inside_step(const std::string &rule_name, bool prim
         !replaces_forces(fix);
   });
   if (!fixes.empty())
-    warn_once(fmt::format("Fix {} with quadrature {}: the energy of {} (fix_modify energy yes) in "
-                          "pe, etotal and econserve is taken at the primary node inside the step, "
-                          "not at the step end: first order in the time step. The motion is "
-                          "second order; for the energy output use a Lobatto rule (e.g. "
-                          "quadrature lobatto 2)",
-                          self->style, rule_name, fixes));
+    warn_once(fmt::format("Fix {} with quadrature {}: the energy of {} (fix_modify energy yes) is "
+                          "taken inside the step: first order in the time step{}",
+                          self->style, rule_name, fixes, errorurl(37)));
 }
 
 /* ----------------------------------------------------------------------
@@ -175,10 +171,9 @@ void OtherFixes::warn_langevin_inside_step(const std::string &rule_name, bool pr
     return is(fix, LANGEVIN);
   });
   if (!fixes.empty())
-    warn_once(fmt::format("Fix {} with quadrature {}: {} acts at the centre of the step, where the "
-                          "mean temperature comes out high by the fraction dt/(2 damp) of its "
-                          "damping time; the Lobatto rules have no such term",
-                          self->style, rule_name, fixes));
+    warn_once(fmt::format("Fix {} with quadrature {}: {} acts at the centre of the step: the mean "
+                          "temperature comes out high by the fraction dt/(2 damp){}",
+                          self->style, rule_name, fixes, errorurl(39)));
 }
 
 /* ----------------------------------------------------------------------
@@ -211,14 +206,13 @@ void OtherFixes::refuse_for_rule(const std::string &rule_name, bool primary_at_e
     if (!primary_at_end && after && moves_atoms)
       error->all(FLERR,
                  "Fix {} ({}) acts in initial_integrate after fix {}, which leaves the atoms "
-                 "inside the step with quadrature {}. Use quadrature lobatto 2 or 3, or define "
-                 "fix {} before fix {}",
-                 ifix->id, ifix->style, self->id, rule_name, ifix->id, self->id);
+                 "inside the step with quadrature {}{}",
+                 ifix->id, ifix->style, self->id, rule_name, errorurl(26));
     if (!only_end_nodes && ifix->time_integrate && ifix->box_change)
       error->all(FLERR,
                  "Fix {} with quadrature {}: fix {} ({}) changes the box inside the step while "
-                 "it integrates its atoms. Use quadrature lobatto 2",
-                 self->style, rule_name, ifix->id, ifix->style);
+                 "it integrates its atoms{}",
+                 self->style, rule_name, ifix->id, ifix->style, errorurl(23));
   }
 }
 
@@ -235,19 +229,17 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
   if (is(ifix, LANGEVIN) && (mask & END_OF_STEP))
     error->all(FLERR,
                "Fix {} with quadrature {}: fix {} ({}) with keyword tally yes counts the energy "
-               "it exchanges as for velocity Verlet. Use quadrature lobatto 2 or 3, or tally no",
-               self->style, rule_name, ifix->id, ifix->style);
+               "it exchanges as for velocity Verlet{}",
+               self->style, rule_name, ifix->id, ifix->style, errorurl(27));
   // fixes whose forces follow a count of steps of their own (a tether that
   // moves by a step's length per force call, a coupling or force constant
   // ramped by the step number): the primary node inside the step would
   // take them at the step's end (first order in the step)
   if (steps_own_clock(ifix))
-    error->all(
-        FLERR,
-        "Fix {} with quadrature {}: fix {} ({}) sets its forces from its own count of "
-        "steps, which a force inside the step takes at the step's end. Use quadrature lobatto 2 "
-        "or 3",
-        self->style, rule_name, ifix->id, ifix->style);
+    error->all(FLERR,
+               "Fix {} with quadrature {}: fix {} ({}) sets its forces from its own count of "
+               "steps{}",
+               self->style, rule_name, ifix->id, ifix->style, errorurl(28));
   // walls that reflect atoms act at the primary node, inside the step: the
   // reflection leaves the atom's jump, which no longer fits its velocity
   // (midpoint: etotal drift 20x fix nve's between static walls; mirroring
@@ -257,16 +249,15 @@ void OtherFixes::refuse_inside_step(Fix *ifix, const std::string &rule_name) con
   if (is(ifix, REFLECTS))
     error->all(FLERR,
                "Fix {} with quadrature {}: fix {} ({}) reflects atoms at the node inside the "
-               "step, where the reflected velocity does not fit the atom's jump. Use quadrature "
-               "lobatto 2 or 3",
-               self->style, rule_name, ifix->id, ifix->style);
+               "step{}",
+               self->style, rule_name, ifix->id, ifix->style, errorurl(29));
   // fix ttm exchanges energy with the electrons through the velocities at
   // its force call, which lie inside the step here
   if (is(ifix, TTM))
     error->all(FLERR,
                "Fix {} with quadrature {}: fix {} ({}) counts the energy it exchanges with the "
-               "electrons from velocities inside the step. Use quadrature lobatto 2 or 3",
-               self->style, rule_name, ifix->id, ifix->style);
+               "electrons from velocities inside the step{}",
+               self->style, rule_name, ifix->id, ifix->style, errorurl(30));
 }
 
 /* ---------------------------------------------------------------------- */
@@ -284,8 +275,8 @@ void OtherFixes::refuse_shared_atoms() const
     if (shared > 0)
       error->all(FLERR,
                  "Fix {} must be the only time integration fix acting on its atoms: {} of them "
-                 "are integrated by fix {} ({}) too. Give the two fixes separate groups",
-                 self->style, shared, ifix->id, ifix->style);
+                 "are integrated by fix {} ({}) too{}",
+                 self->style, shared, ifix->id, ifix->style, errorurl(18));
   }
 }
 
@@ -338,24 +329,21 @@ void OtherFixes::refuse_inserted_atoms(const std::string &rule_name, bool interi
       if (mine && theirs)
         error->all(FLERR,
                    "Fix {} must be the only time integration fix acting on its atoms: fix {} "
-                   "({}) inserts atoms into its group and into that of fix {} ({}). Give the "
-                   "two fixes separate groups",
-                   self->style, ifix->id, ifix->style, other->id, other->style);
+                   "({}) inserts atoms into its group and into that of fix {} ({}){}",
+                   self->style, ifix->id, ifix->style, other->id, other->style, errorurl(19));
       if (!interior || !pairs) continue;
       if (theirs && populated(0) && !may_be_excluded(bits))
         error->all(FLERR,
                    "Fix {} with quadrature {}: fix {} ({}) inserts atoms that fix {} ({}) "
-                   "integrates and that will interact with this fix's atoms. Use quadrature "
-                   "lobatto 2, or let fix {} insert into this fix's group",
+                   "integrates and that will interact with this fix's atoms{}",
                    self->style, rule_name, ifix->id, ifix->style, other->id, other->style,
-                   ifix->id);
+                   errorurl(21));
       if (mine && populated(set) && !may_be_excluded(bits))
         error->all(FLERR,
                    "Fix {} with quadrature {}: fix {} ({}) inserts atoms into its group that will "
-                   "interact with the atoms of fix {} ({}). Use quadrature lobatto 2, or one fix "
-                   "{} for all interacting atoms",
+                   "interact with the atoms of fix {} ({}){}",
                    self->style, rule_name, ifix->id, ifix->style, other->id, other->style,
-                   self->style);
+                   errorurl(22));
     }
   }
 }
@@ -480,13 +468,10 @@ void OtherFixes::warn_step_number(const std::string &rule_name, bool primary_at_
   if (fixes.empty()) return;
   const auto names = step_number_variables(lmp);
   if (names.empty()) return;
-  warn_once(fmt::format("Fix {}: variable(s) {} read the step number (step, elapsed, ramp(), "
-                        "vdisplace(), swiggle(), cwiggle()). Forces or parameters that {} may "
-                        "take from them are sampled by quadrature {} at nodes that see the step "
-                        "number of the step end: first order in the time step. Write such "
-                        "variables with time, which every node sees at its own time, or use "
-                        "quadrature lobatto 2",
-                        self->style, utils::join_words(names, ", "), fixes, rule_name));
+  warn_once(fmt::format("Fix {}: variable(s) {} read the step number; forces or parameters that "
+                        "{} may take from them are first order with quadrature {}{}",
+                        self->style, utils::join_words(names, ", "), fixes, rule_name,
+                        errorurl(38)));
 }
 
 /* ----------------------------------------------------------------------
@@ -526,7 +511,6 @@ void OtherFixes::refuse_interactions(const char *rule_name) const
   if (global)
     error->all(FLERR,
                "Fix {} with quadrature {}: atoms of another time integrator interact with its "
-               "atoms at step {}. Use quadrature lobatto 2, or one fix {} for all interacting "
-               "atoms",
-               self->style, rule_name, update->ntimestep, self->style);
+               "atoms at step {}{}",
+               self->style, rule_name, update->ntimestep, errorurl(20));
 }

@@ -20,6 +20,7 @@
 #include "modify.h"
 #include "neighbor.h"
 #include "output.h"
+#include "pe_jump_errors.h"
 #include "pe_jump_quadrature.h"
 #include "update.h"
 
@@ -242,10 +243,8 @@ void StabilityGuard::refuse_zero_skin(const char *style, bool evaluations_at_bui
   if ((neighbor->skin > 0.0) || evaluations_at_builds) return;
   error->all(FLERR,
              "Fix {} needs a neighbor skin > 0 (neighbor {} ...): {} evaluates forces away from "
-             "the positions where LAMMPS builds the neighbor lists, where pairs would be "
-             "missed. Use a skin > 0, e.g. neighbor 0.3 bin{}",
-             style, neighbor->skin, what,
-             utils::strmatch(style, "^pe_jump/async") ? "" : ", or quadrature lobatto 2");
+             "where the lists are built{}",
+             style, neighbor->skin, what, errorurl(4));
 }
 
 /* ----------------------------------------------------------------------
@@ -318,8 +317,8 @@ bool StabilityGuard::conclude(const char *style, const double *local, double &fl
     case TOO_FAR:
       error->all(FLERR,
                  "Fix {}: atoms move more than half the neighbor skin ({}) between the force "
-                 "evaluations of step {}: reduce the time step (or K) or increase the skin",
-                 style, neighbor->skin, update->ntimestep);
+                 "evaluations of step {}{}",
+                 style, neighbor->skin, update->ntimestep, errorurl(3));
       break;
     case REBUILD:
       return true;

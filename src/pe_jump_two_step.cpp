@@ -21,6 +21,7 @@
 #include "force.h"
 #include "input.h"
 #include "pe_jump_atom_state.h"
+#include "pe_jump_errors.h"
 #include "update.h"
 
 #include <algorithm>
@@ -69,22 +70,23 @@ void TwoStep::init(const char *style)
 {
   reinitialized = pending_setup;    // a command between runs initialized LAMMPS
   if (utils::strmatch(update->integrate_style, "^respa"))
-    error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet", style);
+    error->all(FLERR, "Fix {} does not support run_style respa: use run_style verlet{}", style,
+               errorurl(7));
   // the jump relation needs a step that goes forward: with h = 0 it flips
   // the jump every step, and a change of sign excites the parasitic mode
   if (!(update->dt > 0.0))
     error->all(FLERR,
                "Fix {} needs a timestep > 0, got {}: to run backwards in time, reverse the "
-               "velocities instead",
-               style, update->dt);
+               "velocities instead{}",
+               style, update->dt, errorurl(8));
   if (atom->torque_flag)
-    error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques", style,
-               atom->atom_style);
+    error->all(FLERR, "Fix {} integrates point particles only; atom style {} has torques{}", style,
+               atom->atom_style, errorurl(12));
   // (the force evaluations of the fixes clear atom->f only, not the extra
   // per-atom forces that such styles clear in Verlet::force_clear)
   if (atom->avec->forceclearflag)
-    error->all(FLERR, "Fix {} does not integrate the extra per-atom quantities of atom style {}",
-               style, atom->atom_style);
+    error->all(FLERR, "Fix {} does not integrate the extra per-atom quantities of atom style {}{}",
+               style, atom->atom_style, errorurl(13));
 
   // a division per atom costs more than the rest of the update
   inverse_mass.assign(atom->ntypes + 1, 0.0);
@@ -140,8 +142,8 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
   MPI_Allreduce(&bad, &all_bad, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   if (all_bad)
     error->all(FLERR,
-               "Fix {}: {} atoms have velocities that are not finite at the start of the run",
-               style, all_bad);
+               "Fix {}: {} atoms have velocities that are not finite at the start of the run{}",
+               style, all_bad, errorurl(9));
   // forces that are not finite (atoms on top of each other) would make
   // the jumps so, and the first step's checks would blame the time step
   double **f = atom->f;
@@ -151,10 +153,8 @@ void TwoStep::agree_on_started(const AtomSet &set, const char *style, bool new_s
   });
   MPI_Allreduce(&bad, &all_bad, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   if (all_bad)
-    error->all(FLERR,
-               "Fix {}: {} atoms have forces that are not finite at the start of the run (atoms "
-               "on top of each other, or a force field that diverges where they are)",
-               style, all_bad);
+    error->all(FLERR, "Fix {}: {} atoms have forces that are not finite at the start of the run{}",
+               style, all_bad, errorurl(10));
   started = (all_started > 0) ? 1 : 0;
 }
 
@@ -319,9 +319,9 @@ bool TwoStep::check_run_without_setup(const char *style, const AtomSet &set, boo
   if (why.empty() && clocks_changed) why = "the atoms on the fine clock changed since the last run";
   if (!why.empty())
     error->all(FLERR,
-               "Fix {}: {}, and this run starts with 'pre no', which skips the fix's check at "
-               "the start of a run: use run with pre yes (the default)",
-               style, why);
+               "Fix {}: {}, and this run starts with 'pre no': use run with pre yes (the "
+               "default){}",
+               style, why, errorurl(11));
   const bool stale = reinitialized;
   reinitialized = false;
   return stale;

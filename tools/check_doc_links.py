@@ -13,7 +13,7 @@ wrong; the exit status is the number of failed checks (0 = all passed).
   (```text <target>`_``) is a file of the repository, and an anchor after
   ``#`` in a link to a Markdown file is one of its headings (GitHub's
   heading ids);
-* links into the pages: every Markdown link to doc/fix_pe_jump*.rst from
+* links into the pages: every Markdown link to a page doc/*.rst from
   doc/*.md, README.md and examples/*/README.md names an existing page, and
   an anchor after ``#`` is a section or label of that page;
 * characters and roles: LAMMPS' char_check and role_check of its doc
@@ -145,7 +145,7 @@ def main():
     problems, count = [], 0
     for src in sorted(s for s in sources if os.path.exists(s)):
         text = read(src)
-        for m in re.finditer(r'\]\(([^)\s]*fix_pe_jump[^)\s]*\.rst(?:#[^)\s]*)?)\)', text):
+        for m in re.finditer(r'\]\((?![a-z][a-z0-9+.-]*:)([^)\s]*\.rst(?:#[^)\s]*)?)\)', text):
             count += 1
             line = text.count('\n', 0, m.start()) + 1
             path, _, anchor = m.group(1).partition('#')

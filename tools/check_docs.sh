@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # Build the command pages doc/fix_pe_jump.rst and doc/fix_pe_jump_async.rst
-# with Sphinx, warnings being errors (sphinx-build -W), and run the checks of
-# the LAMMPS manual that apply to them:
+# and the page of error details doc/Errors_pe_jump.rst with Sphinx, warnings
+# being errors (sphinx-build -W), and run the checks of the LAMMPS manual that
+# apply to them:
 #
 #   1. HTML build, -W (configuration in doc/sphinx/conf.py; :doc: links to
 #      LAMMPS pages must be listed in doc/sphinx/lammps_pages.txt)
 #   2. anchors and links, LAMMPS' char_check and role_check, index entries of
-#      the fix styles, the listed LAMMPS pages (tools/check_doc_links.py)
+#      the fix styles, the listed LAMMPS pages (tools/check_doc_links.py), and
+#      the links of the error messages to doc/Errors_pe_jump.rst, with their
+#      ids in the HTML (tools/check_error_links.py)
 #   3. spelling (sphinxcontrib.spelling, American English, with the project's
 #      word list doc/sphinx/spelling_wordlist.txt), if the extension and an
 #      en_US dictionary are installed; with --require-spelling their absence
@@ -80,6 +83,10 @@ step "sphinx-build -W -b html" html
 
 links() {
   python3 "$top/tools/check_doc_links.py" ${lammps_doc:+--lammps-doc "$lammps_doc"}
+  local rc=$?
+  # the links of the error messages to doc/Errors_pe_jump.rst, and their ids in the HTML
+  python3 "$top/tools/check_error_links.py" --html "$out/html" || rc=1
+  return "$rc"
 }
 step "anchors, links, characters, roles, index entries, LAMMPS pages" links
 

@@ -143,7 +143,7 @@ TEST(PEJumpLammpsExamples, DepositBesideAnotherIntegratorIsRefusedAtSetup)
     EXPECT_THAT(error,
                 ::testing::ContainsRegex("fix 4 \\(deposit\\) inserts atoms that fix 1 \\(nve\\) "
                                          "integrates and that will interact with this fix's "
-                                         "atoms.*Use quadrature lobatto 2"))
+                                         "atoms"))
         << rule;
   }
   std::string error;

@@ -1,6 +1,7 @@
 # Sphinx configuration for the two command pages of PE-JUMP
-# (doc/fix_pe_jump.rst and doc/fix_pe_jump_async.rst), in the manner of the
-# LAMMPS manual's own doc/ build.  Build from the top of the repository with
+# (doc/fix_pe_jump.rst and doc/fix_pe_jump_async.rst) and its page of error
+# details (doc/Errors_pe_jump.rst), in the manner of the LAMMPS manual's own
+# doc/ build.  Build from the top of the repository with
 #
 #   sphinx-build -W --keep-going -c doc/sphinx -b html doc <output folder>
 #

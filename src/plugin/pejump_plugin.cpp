@@ -24,6 +24,7 @@
 
 #include "fix_pe_jump.h"
 #include "fix_pe_jump_async.h"
+#include "pe_jump_errors.h"
 
 using namespace LAMMPS_NS;
 
@@ -67,9 +68,7 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   if (built_for != running) {
     const std::string message = std::string("The PE-JUMP plugin was built for LAMMPS version ") +
         PEJUMP_PLUGIN_BUILT_FOR + " (" + std::to_string(built_for) +
-        ") but this LAMMPS is version " + std::to_string(running) +
-        ": build the plugin against this LAMMPS (cmake -D LAMMPS_SOURCE_DIR=...), or use the lmp "
-        "built with it";
+        ") but this LAMMPS is version " + std::to_string(running) + PEJump::errorurl(65);
     // printed here (lammps_error() would end the process of a library
     // caller), then the plugin load stops with the error
     if (lammps_extract_setting(lmp, "world_rank") == 0) {
