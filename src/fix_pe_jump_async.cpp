@@ -1208,8 +1208,9 @@ void FixPEJumpAsync::watch_growth()
   if (growth->growth() && (comm->me == 0))
     error->warning(FLERR,
                    "Fix {}: the jump energy's share of the kinetic energy grew from {:.3g} to "
-                   "{:.3g} by step {}: a slow instability of the two clocks",
-                   style, growth->reference_share(), growth->latest_share(), update->ntimestep);
+                   "{:.3g} by step {}: a slow instability of the two clocks{}",
+                   style, growth->reference_share(), growth->latest_share(), update->ntimestep,
+                   PEJump::errorurl(66));
 }
 
 /* ----------------------------------------------------------------------
