@@ -232,12 +232,12 @@ void FixPEJump::init()
   // forces that the rule does not integrate (other fixes that add forces,
   // contributions left out by sample) act as impulses at the primary node:
   // the force there is split into the sampled part and the rest. The
-  // impulse must sit at the centre of the step or at its end, so an even
-  // Gauss-Legendre rule then gets the centre as an extra node
+  // impulse must sit at the centre of the step or at its end, so a rule
+  // whose primary node is elsewhere (an even Gauss-Legendre rule) then
+  // gets the centre as an extra node
 
   const int present = sampler->present();
-  const bool centre = split_primary() && (rule->family() == Quadrature::LEGENDRE) &&
-      (rule->points() % 2 == 0) && !auto_quadrature;
+  const bool centre = split_primary() && rule->primary_off_centre() && !auto_quadrature;
   if (centre != (rule->size() != rule->points())) {
     auto *other = new Quadrature(rule->family(), rule->points(), centre);
     delete rule;

@@ -99,6 +99,7 @@ int Options::quadrature(LAMMPS *lmp, const char *style, int narg, char **arg, in
   const std::string fix = std::string("fix ") + style;
   if (iarg + 2 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature", lmp->error);
   const std::string which = arg[iarg + 1];
+  Quadrature::Family named;
   auto_tol = 0.0;    // the last quadrature keyword wins
   if (which == "midpoint") {
     family = Quadrature::LEGENDRE;
@@ -111,11 +112,11 @@ int Options::quadrature(LAMMPS *lmp, const char *style, int narg, char **arg, in
     family = Quadrature::LOBATTO;
     npoints = 5;
     iarg += 3;
-  } else if ((which == "lobatto") || (which == "legendre")) {
+  } else if (Quadrature::family_named(which, named)) {
     if (iarg + 3 > narg) utils::missing_cmd_args(FLERR, fix + " quadrature " + which, lmp->error);
     npoints = utils::inumeric(FLERR, arg[iarg + 2], false, lmp);
-    family = (which == "lobatto") ? Quadrature::LOBATTO : Quadrature::LEGENDRE;
-    const int nmin = (family == Quadrature::LOBATTO) ? 2 : 1;
+    family = named;
+    const int nmin = Quadrature::min_points(named);
     if ((npoints < nmin) || (npoints > Quadrature::MAX_POINTS))
       lmp->error->all(FLERR, "Fix {} quadrature {} needs {} to {} points, got {}", style, which,
                       nmin, Quadrature::MAX_POINTS, npoints);

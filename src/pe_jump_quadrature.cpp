@@ -87,7 +87,7 @@ Quadrature::Quadrature(Family family, int npoints, bool centre_node) : fam(famil
   if (first) {
     node.push_back(0.5);
     weight.push_back(0.5 * half.w[0]);
-  } else if (centre_node && (family == LEGENDRE)) {
+  } else if (centre_node) {
     node.push_back(0.5);
     weight.push_back(0.0);
   }
@@ -101,8 +101,30 @@ Quadrature::Quadrature(Family family, int npoints, bool centre_node) : fam(famil
 
 int Quadrature::primary() const
 {
-  if (fam == LOBATTO) return size() - 1;
+  if (node.back() == 1.0) return size() - 1;
   return size() / 2;
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool Quadrature::primary_off_centre() const
+{
+  const Quadrature proper(fam, npts);
+  const double at = proper.node[proper.primary()];
+  return (at != 0.5) && (at != 1.0);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool Quadrature::family_named(const std::string &name, Family &family)
+{
+  if (name == "lobatto")
+    family = LOBATTO;
+  else if (name == "legendre")
+    family = LEGENDRE;
+  else
+    return false;
+  return true;
 }
 
 /* ---------------------------------------------------------------------- */

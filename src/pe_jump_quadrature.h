@@ -37,6 +37,11 @@ namespace PEJump {
     // node (where forces that are not integrated by the rule are taken)
     Quadrature(Family family, int npoints, bool centre_node = false);
 
+    // the family of a rule's name in the input ("lobatto", "legendre"):
+    // false if there is none; the fewest points of a family
+    static bool family_named(const std::string &name, Family &family);
+    static int min_points(Family family) { return (family == LOBATTO) ? 2 : 1; }
+
     Family family() const { return fam; }
     int points() const { return npts; }    // points of the rule proper
     int size() const { return static_cast<int>(node.size()); }
@@ -45,10 +50,14 @@ namespace PEJump {
 
     // true if the first node is the start of the interval and the last its end,
     // so that the end node of one step is the start node of the next
-    bool has_end_nodes() const { return fam == LOBATTO; }
+    bool has_end_nodes() const { return (node.front() == 0.0) && (node.back() == 1.0); }
     // every node is a step end (lobatto 2): atoms of another time
     // integrator may then interact with the atoms of the rule
-    bool only_end_nodes() const { return (fam == LOBATTO) && (size() == 2); }
+    bool only_end_nodes() const { return has_end_nodes() && (size() == 2); }
+    // the primary node of the rule proper is neither the centre nor the
+    // end of the step, where an impulse at the primary node must sit (the
+    // constructor's centre_node then adds the centre)
+    bool primary_off_centre() const;
 
     // the start node is the previous step's end node: its forces are kept
     // from there (fstart) instead of sampled again
@@ -79,8 +88,8 @@ namespace PEJump {
     StartSum start_sum() const { return {weight[primary()], weight[0], reuses_start_node()}; }
 
     // node used for the force evaluation that the MD loop does anyway:
-    // the end node for Lobatto rules, the middle (or first past the middle)
-    // node for Legendre rules
+    // the step end if it is a node, else the middle (or first past the
+    // middle) node
     int primary() const;
 
     std::vector<double> node, weight;

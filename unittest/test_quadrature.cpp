@@ -156,3 +156,43 @@ TEST(Quadrature, StartSumReusesTheLastEndNode)
   legendre.start_sum()(f1, nullptr, sum);
   for (int k = 0; k < 3; k++) EXPECT_EQ(sum[k], f1[k]) << k;
 }
+
+/* ----------------------------------------------------------------------
+   the properties the fixes ask a rule for follow from its nodes: end
+   nodes (both ends of the step are nodes), the primary node (the step
+   end if it is a node, else the middle), whether an impulse at the
+   primary node needs the centre as an extra node; the names of the input
+------------------------------------------------------------------------- */
+
+TEST(Quadrature, PropertiesFollowFromTheNodes)
+{
+  for (int n = 1; n <= Quadrature::MAX_POINTS; n++) {
+    const Quadrature legendre(Quadrature::LEGENDRE, n);
+    EXPECT_FALSE(legendre.has_end_nodes());
+    EXPECT_FALSE(legendre.only_end_nodes());
+    EXPECT_EQ(legendre.primary(), n / 2);
+    EXPECT_EQ(legendre.primary_off_centre(), n % 2 == 0) << n;
+    if (n % 2 == 0) {
+      const Quadrature centred(Quadrature::LEGENDRE, n, true);
+      EXPECT_EQ(centred.size(), n + 1);
+      EXPECT_EQ(centred.node[centred.primary()], 0.5);
+      EXPECT_EQ(centred.weight[centred.primary()], 0.0);
+    }
+  }
+  for (int n = 2; n <= Quadrature::MAX_POINTS; n++) {
+    const Quadrature lobatto(Quadrature::LOBATTO, n);
+    EXPECT_TRUE(lobatto.has_end_nodes());
+    EXPECT_TRUE(lobatto.reuses_start_node());
+    EXPECT_EQ(lobatto.only_end_nodes(), n == 2);
+    EXPECT_EQ(lobatto.node[lobatto.primary()], 1.0);
+    EXPECT_FALSE(lobatto.primary_off_centre());
+  }
+  Quadrature::Family family = Quadrature::LEGENDRE;
+  EXPECT_TRUE(Quadrature::family_named("lobatto", family));
+  EXPECT_EQ(family, Quadrature::LOBATTO);
+  EXPECT_EQ(Quadrature::min_points(family), 2);
+  EXPECT_TRUE(Quadrature::family_named("legendre", family));
+  EXPECT_EQ(family, Quadrature::LEGENDRE);
+  EXPECT_EQ(Quadrature::min_points(family), 1);
+  EXPECT_FALSE(Quadrature::family_named("radau", family));
+}
