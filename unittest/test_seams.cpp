@@ -360,6 +360,24 @@ void free_atoms(Sim &s, const std::vector<int> &types)
   s.cmds({"pair_style zero 1.0", "pair_coeff * *", "run 0 post no"});
 }
 
+// a TwoStep (no start node kept) over free atoms of the given types, with
+// its per-atom state sized for them
+struct FreeAtoms {
+  FreeAtoms(Sim &s, const std::vector<int> &types) { free_atoms(s, types); }
+};
+struct TwoStepRig {
+  Sim s;
+  FreeAtoms made;
+  AtomState state;
+  TwoStep two;
+  explicit TwoStepRig(const std::vector<int> &types) :
+      made(s, types), state(s.lmp), two(s.lmp, state, false)
+  {
+    state.ensure(s.lmp->atom->nlocal);
+    two.init("pe_jump");
+  }
+};
+
 }    // namespace
 
 /* ----------------------------------------------------------------------
@@ -373,13 +391,11 @@ void free_atoms(Sim &s, const std::vector<int> &types)
 
 TEST(TwoStep, JumpLoopFollowsTheJumpRelation)
 {
-  Sim s;
-  free_atoms(s, {1});
+  TwoStepRig rig({1});
+  Sim &s = rig.s;
+  AtomState &state = rig.state;
+  TwoStep &two = rig.two;
   auto *atom = s.lmp->atom;
-  AtomState state(s.lmp);
-  TwoStep two(s.lmp, state, false);
-  state.ensure(atom->nlocal);
-  two.init("pe_jump");
   const AtomSet all{1, nullptr};
   const double m = 2.0, h = 0.002, ftm2v = s.lmp->force->ftm2v;
   ASSERT_NEAR(ftm2v, 1.0 / 1.0364269e-4, 1e-6 * ftm2v);
@@ -458,16 +474,14 @@ TEST(TwoStep, JumpLoopFollowsTheJumpRelation)
 
 TEST(TwoStep, OnlyTheAtomsOfTheSetMove)
 {
-  Sim s;
-  free_atoms(s, {1, 2, 1});
+  TwoStepRig rig({1, 2, 1});
+  Sim &s = rig.s;
+  AtomState &state = rig.state;
+  TwoStep &two = rig.two;
   s.cmd("group middle id 2");
   auto *atom = s.lmp->atom;
   const int n = atom->nlocal;
   ASSERT_EQ(n, 3);
-  AtomState state(s.lmp);
-  TwoStep two(s.lmp, state, false);
-  state.ensure(n);
-  two.init("pe_jump");
   const double h = 0.001, ftm2v = s.lmp->force->ftm2v;
   Rows favg(n);
   for (int i = 0; i < n; ++i)
@@ -523,14 +537,12 @@ TEST(TwoStep, OnlyTheAtomsOfTheSetMove)
 
 TEST(TwoStep, EnergiesOfAKnownState)
 {
-  Sim s;
-  free_atoms(s, {1, 2, 1});
+  TwoStepRig rig({1, 2, 1});
+  Sim &s = rig.s;
+  AtomState &state = rig.state;
+  TwoStep &two = rig.two;
   auto *atom = s.lmp->atom;
   const int n = atom->nlocal;
-  AtomState state(s.lmp);
-  TwoStep two(s.lmp, state, false);
-  state.ensure(n);
-  two.init("pe_jump");
   const double vn[3][3] = {{1.0, -2.0, 0.5}, {0.25, 0.0, -1.5}, {-0.75, 1.25, 2.0}};
   const double jn[3][3] = {{0.2, 0.1, -0.4}, {-0.3, 0.05, 0.0}, {0.0, -0.6, 0.35}};
   double mass[3];
@@ -594,14 +606,12 @@ TEST(TwoStep, EnergiesOfAKnownState)
 
 TEST(TwoStep, VelocityChangesAreFound)
 {
-  Sim s;
-  free_atoms(s, {1, 2, 1});
+  TwoStepRig rig({1, 2, 1});
+  Sim &s = rig.s;
+  AtomState &state = rig.state;
+  TwoStep &two = rig.two;
   auto *atom = s.lmp->atom;
   const int n = atom->nlocal;
-  AtomState state(s.lmp);
-  TwoStep two(s.lmp, state, false);
-  state.ensure(n);
-  two.init("pe_jump");
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
       atom->v[i][k] = 0.3 * (i + 1) + 0.1 * k;
