@@ -910,14 +910,28 @@ void FixPEJump::quadrature_sum()
   if (rule->size() - first <= 1) return;
   // with a Lobatto rule the total force at the primary node (the step end)
   // is needed afterwards only for the impulses of forces outside the rule,
-  // or if something looks at it (it is then fstart again)
-  const bool keep_forces = split_primary() || !reuse_start;
+  // or if something looks at it: it is then fstart again, which holds this
+  // fix's atoms only, so that beside other atoms (of another integrator,
+  // frozen ones) the forces are kept instead
+  const bool observed = atom->nlocal && (others->step_observed() || node_sampler->tally_step());
+  const bool keep_forces = split_primary() || !reuse_start ||
+      (observed && !group_holds_all_local());
   const int evaluated =
       node_sampler->sum_nodes(*rule, first, p, h_step, -rule->node[p] * h_step, free_flight(),
                               group_atoms(), opts->sample_mask, fsum(), nullptr, keep_forces);
   evals->step += evaluated * sampler->fraction(opts->sample_mask);
-  if (!keep_forces && atom->nlocal && (others->step_observed() || node_sampler->tally_step()))
+  if (!keep_forces && observed)
     memcpy(&atom->f[0][0], &fstart[0][0], 3 * sizeof(double) * atom->nlocal);
+}
+
+/* ---------------------------------------------------------------------- */
+
+bool FixPEJump::group_holds_all_local() const
+{
+  const int *mask = atom->mask;
+  for (int i = 0; i < atom->nlocal; i++)
+    if (!(mask[i] & groupbit)) return false;
+  return true;
 }
 
 /* ----------------------------------------------------------------------

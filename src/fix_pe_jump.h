@@ -114,6 +114,7 @@ class FixPEJump : public Fix {
   double **fsample() const;
   void grow_work();
 
+  bool group_holds_all_local() const;    // every owned atom is in the group
   PEJump::AtomSet group_atoms() const;
   // forces not integrated by the rule (other fixes that add forces,
   // contributions left out by sample) act as impulses at the primary node,
