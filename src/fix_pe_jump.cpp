@@ -928,6 +928,7 @@ void FixPEJump::quadrature_sum()
 
 bool FixPEJump::group_holds_all_local() const
 {
+  if (igroup == 0) return true;    // LAMMPS' group all
   const int *mask = atom->mask;
   for (int i = 0; i < atom->nlocal; i++)
     if (!(mask[i] & groupbit)) return false;
