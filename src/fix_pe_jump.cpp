@@ -349,7 +349,7 @@ void FixPEJump::setup(int /*vflag*/)
   if (!rule->only_end_nodes()) others->refuse_interactions(rule->name().c_str());
   if (step_control->adapts())
     step_control->start_run(style, pe + two_step->energies(group_atoms())[0]);
-  if (damping->automatic_on() && !two_step->reading_snapshots()) note_damping(false);
+  if (damping->automatic_on() && !two_step->reading_snapshots()) damping->note(lmp, style, false);
   if (auto_quadrature) auto_quadrature->start_run(*node_sampler, opts->sample_mask);
 }
 
@@ -982,39 +982,17 @@ void FixPEJump::check_excursion(double lo, double hi)
   guard->step(h_step);
   guard->step_measures(group_atoms(), free_flight(), two_step->jump(), xhold, {h_step, lo, hi},
                        local);
-  finish_check(local);
-}
-
-/* ----------------------------------------------------------------------
-   reduce the guard's measures (with them, whether another fix changed a
-   velocity: damp auto damps the parasitic mode from then on) and act on
-   the verdict
-------------------------------------------------------------------------- */
-
-void FixPEJump::finish_check(const double *local)
-{
-  double impulse = damping->take_impulse();
-  const bool rebuild = guard->conclude(
-      style, local, impulse,
-      [&]() {
-        return two_step->energies(group_atoms());
-      },
-      [&]() {
-        return instability_advice();
-      });
-  if (damping->impulse_anywhere(impulse > 0.0)) note_damping(true);
-  if (rebuild) next_reneighbor = update->ntimestep;
-}
-
-/* ----------------------------------------------------------------------
-   damp auto damps in this run, or from this step on (a thermostat acts):
-   say so (the damping changes the trajectory at second order in the time
-   step; damp 0 turns it off)
-------------------------------------------------------------------------- */
-
-void FixPEJump::note_damping(bool from_now) const
-{
-  if (comm->me == 0) damping->note(lmp, style, from_now ? update->ntimestep : -1);
+  // (with them, whether another fix changed a velocity: damp auto damps
+  // the parasitic mode from then on)
+  if (guard->conclude(
+          style, local, *damping,
+          [&]() {
+            return two_step->energies(group_atoms());
+          },
+          [&]() {
+            return instability_advice();
+          }))
+    next_reneighbor = update->ntimestep;
 }
 
 /* ---------------------------------------------------------------------- */

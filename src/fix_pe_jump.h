@@ -141,14 +141,12 @@ class FixPEJump : public Fix {
   void auto_quadrature_sum();
   void check_lists();    // neighbor lists valid for this step's nodes
   void check_excursion(double lo, double hi);
-  void finish_check(const double *local);
   std::string instability_advice() const;
   void tell_largest_jump() const;    // in the log, when the run stops as unstable
   void tally_at_node();
   void refuse_atoms_outside_include_group() const;
   void refuse_step_counters() const;
   void check_others_for_rule() const;
-  void note_damping(bool from_now) const;
   double potential_now();
   void global_state(double *) const;
 

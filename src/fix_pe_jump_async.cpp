@@ -114,8 +114,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), rule(nullptr), sampler(nullptr), node_sampler(nullptr), state(nullptr),
     two_step(nullptr), guard(nullptr), damping(nullptr), ghosts(nullptr), others(nullptr),
     tally(nullptr), split(nullptr), clocks(nullptr), clock_assignment(nullptr), classes(nullptr),
-    work(nullptr), changes_seen(0), fine_speed2(0.0), fine_change(0.0), reverse_copy(false),
-    builds_inside(0), lists_forced(false), end_time(0.0), impulse_at_start(false),
+    work(nullptr), changes_seen(0), reverse_copy(false), builds_inside(0), impulse_at_start(false),
     impulse_pending(false)
 {
   opts = new PEJump::Options;
@@ -144,10 +143,10 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   work = new PEJump::WorkForces(lmp, 2);
   state = new AtomState(lmp);
   two_step = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
-  facc_field = state->add("facc", 3, 0.0);
-  fstart_coarse_field = rule->reuses_start_node() ? state->add("fstart_coarse", 3, 0.0) : -1;
-  end_impulse_field = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
-  fcoarse_field = state->add("fcoarse", 3, 0.0);
+  field.facc = state->add("facc", 3, 0.0);
+  field.fstart_coarse = rule->reuses_start_node() ? state->add("fstart_coarse", 3, 0.0) : -1;
+  field.end_impulse = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
+  field.fcoarse = state->add("fcoarse", 3, 0.0);
   damping = new PEJump::ParasiticDamping(*state);
   ghosts = new PEJump::MovingGhosts(lmp, this);
   clock_assignment = new ClockAssignment(
@@ -290,9 +289,9 @@ void FixPEJumpAsync::node_impulses()
     damping->impulse_here();
   // (a pass over the atoms only if an impulse waits: other fixes added
   // forces at the last coarse node, or a restart file may carry one)
-  if ((end_impulse_field < 0) || !impulse_pending) return;
+  if ((field.end_impulse < 0) || !impulse_pending) return;
   double **v = atom->v;
-  double **pending = state->vec(end_impulse_field);
+  double **pending = state->vec(field.end_impulse);
   if (impulse_at_start) {
     // (the first step of a new start: see start_scheme())
     double **f = atom->f;
@@ -354,7 +353,7 @@ void FixPEJumpAsync::setup(int /*vflag*/)
   slow_magnitudes();
   classes->label(*split, *clock_assignment, groupbit);
   log_steps();
-  if (damping->automatic_on() && !two_step->reading_snapshots()) note_damping(false);
+  if (damping->automatic_on() && !two_step->reading_snapshots()) damping->note(lmp, style, false);
 }
 
 /* ----------------------------------------------------------------------
@@ -625,7 +624,7 @@ void FixPEJumpAsync::store_start_node()
 {
   double **f = atom->f;
   double **fstart = two_step->fstart();
-  double **fstart_coarse = state->vec(fstart_coarse_field);
+  double **fstart_coarse = state->vec(field.fstart_coarse);
   const int *mask = atom->mask;
   const int nlocal = atom->nlocal;
   NodeSampler::Keep keep(*node_sampler);
@@ -854,7 +853,7 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
       two_step->check_run_without_setup(style, group_atoms(), clock_assignment->changed());
   if (two_step->has_started()) change_clocks();
   node_impulses();
-  lists_forced = guard->rebuild_forced();
+  step_now.lists_forced = guard->rebuild_forced();
   begin_coarse_step();
   // the step ends at the primary node (Lobatto rules): the fine and the
   // coarse interactions are evaluated there, and their tallies give the
@@ -868,7 +867,7 @@ void FixPEJumpAsync::initial_integrate(int /*vflag*/)
   // depends on time (a variable of time, e.g. in fix addforce) must see the
   // node's time, or its impulse is off by h_S F'/2 per step (first order).
   // Put back as the MD step's evaluation is done
-  end_time = update->atime;
+  step_now.end_time = update->atime;
   update->atime -= (1.0 - primary) * update->dt;
 }
 
@@ -881,7 +880,7 @@ void FixPEJumpAsync::begin_coarse_step()
 {
   clocks->begin(update->dt);
   evals->step = 0.0;
-  fine_speed2 = fine_change = 0.0;
+  step_now.speed2 = step_now.change = 0.0;
   grow_work();
   two_step->open(group_atoms(), watch(OtherFixes::INSIDE_STEP));
 }
@@ -933,9 +932,9 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
   double mag[2] = {0.0, 0.0};
   const double ahead = next_ahead ? rule->node[rule->primary()] * h : -1.0;
   finish_fine_step((rule->size() > 1) ? work->get(SUM) : atom->f, ahead, mag);
-  fine_speed2 = MAX(fine_speed2, mag[0]);
-  fine_change = MAX(fine_change, mag[1]);
-  guard->set_stats(fine_speed2, fine_change);
+  step_now.speed2 = MAX(step_now.speed2, mag[0]);
+  step_now.change = MAX(step_now.change, mag[1]);
+  guard->set_stats(step_now.speed2, step_now.change);
   clocks->fine_step_done();
   if (ahead > 0.0) clocks->moved_to(clocks->done() + rule->node[rule->primary()]);
 }
@@ -988,38 +987,16 @@ bool FixPEJumpAsync::check_fine_nodes(double into)
   guard->step_measures(group_atoms(&clock_assignment->moving_atoms), free_flight(),
                        two_step->jump(), xhold, {h, lo, hi}, local);
   guard->join_slow_stats(clocks->coarse_step(), local);
-  return finish_check(local);
-}
-
-/* ----------------------------------------------------------------------
-   act on the stability guard's verdict (the ranks agree): true if the
-   lists must be built again
-------------------------------------------------------------------------- */
-
-bool FixPEJumpAsync::finish_check(const double *local)
-{
   // (with them, whether another fix changed a velocity at the coarse node:
   // damp auto damps the parasitic mode from then on)
-  double impulse = damping->take_impulse();
-  const bool rebuild = guard->conclude(
-      style, local, impulse,
+  return guard->conclude(
+      style, local, *damping,
       [&]() {
         return two_step->energies(group_atoms());
       },
       [&]() {
         return instability_advice();
       });
-  if (damping->impulse_anywhere(impulse > 0.0)) note_damping(true);
-  return rebuild;
-}
-
-/* ----------------------------------------------------------------------
-   damp auto damps in this run, or from this step on: the log says so
-------------------------------------------------------------------------- */
-
-void FixPEJumpAsync::note_damping(bool from_now) const
-{
-  if (comm->me == 0) damping->note(lmp, style, from_now ? update->ntimestep : -1);
 }
 
 /* ----------------------------------------------------------------------
@@ -1124,7 +1101,7 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double ahead, double *mag)
   const double h = clocks->fine_step();
   double **x = atom->x;
   double **v = atom->v;
-  double **facc = state->vec(facc_field);
+  double **facc = state->vec(field.facc);
   const double rest = (1.0 - rule->node[rule->primary()]) * h;
   const bool more = clocks->done() + 1 < clocks->steps();
   const bool fingerprint =
@@ -1149,7 +1126,7 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double ahead, double *mag)
 
 void FixPEJumpAsync::final_integrate()
 {
-  update->atime = end_time;
+  update->atime = step_now.end_time;
   grow_work();
   if (watch(OtherFixes::INSIDE_STEP)) {
     if (two_step->any_changed(group_atoms())) changes_seen = 1;
@@ -1169,7 +1146,7 @@ void FixPEJumpAsync::final_integrate()
   // lists that LAMMPS built in this step whatever the atoms did (neigh_modify
   // check no, a restart file written, a fix asking) are built again where a
   // run continued after this step builds them: every atom at the step end
-  if (lists_forced && (neighbor->ago == 0)) build_lists_now();
+  if (step_now.lists_forced && (neighbor->ago == 0)) build_lists_now();
   const bool tallied = tally->complete();
   if (node_sampler->step_end_evaluated(tallied)) lists_fit_step_end();
 
@@ -1237,8 +1214,8 @@ void FixPEJumpAsync::add_fine_forces_at_end()
 
 void FixPEJumpAsync::keep_coarse_primary(double **f)
 {
-  double **fcoarse = state->vec(fcoarse_field);
-  double **fstart = rule->reuses_start_node() ? state->vec(fstart_coarse_field) : nullptr;
+  double **fcoarse = state->vec(field.fcoarse);
+  double **fstart = rule->reuses_start_node() ? state->vec(field.fstart_coarse) : nullptr;
   const auto begin = rule->start_sum();
   for (const int i : clock_assignment->slow_atoms)
     begin(f[i], fstart ? fstart[i] : nullptr, fcoarse[i]);
@@ -1252,7 +1229,7 @@ void FixPEJumpAsync::keep_coarse_primary(double **f)
    midpoint and Legendre rules: position Verlet for these forces) on its
    free-flight velocity, which carries it on; at the end node (Lobatto
    rules: velocity Verlet) half on the node velocity there and half as the
-   next coarse step begins (end_impulse_field). Returns the coarse interactions'
+   next coarse step begins (field.end_impulse). Returns the coarse interactions'
    forces.
 ------------------------------------------------------------------------- */
 
@@ -1274,7 +1251,7 @@ double **FixPEJumpAsync::coarse_forces_apart()
   }
   double **f = atom->f;
   double **v = atom->v;
-  double **pending = (end_impulse_field >= 0) ? state->vec(end_impulse_field) : nullptr;
+  double **pending = (field.end_impulse >= 0) ? state->vec(field.end_impulse) : nullptr;
   impulse_pending = (pending != nullptr);
   const double kick = update->dt * force->ftm2v;
   group_atoms().each(atom->mask, nlocal, [&](int i) {
@@ -1298,7 +1275,7 @@ double **FixPEJumpAsync::coarse_forces_apart()
 void FixPEJumpAsync::end_impulse_first_half()
 {
   double **v = atom->v;
-  double **pending = state->vec(end_impulse_field);
+  double **pending = state->vec(field.end_impulse);
   const bool fingerprint = watch(OtherFixes::BETWEEN_STEPS | OtherFixes::INSIDE_STEP);
   group_atoms().each(atom->mask, atom->nlocal, [&](int i) {
     for (int k = 0; k < 3; k++) v[i][k] += pending[i][k];
@@ -1332,7 +1309,7 @@ void FixPEJumpAsync::coarse_quadrature_sum()
   const int evaluated =
       node_sampler->sum_nodes(*rule, first, rule->primary(), coarse, -coarse, free_flight(),
                               group_atoms(&clock_assignment->slow_atoms), opts->sample_mask,
-                              state->vec(fcoarse_field), nullptr, false);
+                              state->vec(field.fcoarse), nullptr, false);
   evals->step += evaluated * node_cost();
   split->restore();
 }
@@ -1352,7 +1329,7 @@ bool FixPEJumpAsync::primary_is_last_node() const
 
 /* ----------------------------------------------------------------------
    the slow atoms jump with the sums of their fine forces over the coarse
-   step and the coarse quadrature sum (kept in fcoarse_field, or with fprimary
+   step and the coarse quadrature sum (kept in field.fcoarse, or with fprimary
    the primary node's forces, see primary_is_last_node()); mag: their
    largest |v|^2, |[v]|^2
 ------------------------------------------------------------------------- */
@@ -1362,7 +1339,7 @@ void FixPEJumpAsync::slow_jumps(double *mag, double **fprimary)
   if (fprimary)
     slow_jumps_as<true>(mag, fprimary);
   else
-    slow_jumps_as<false>(mag, state->vec(fcoarse_field));
+    slow_jumps_as<false>(mag, state->vec(field.fcoarse));
 }
 
 /* ----------------------------------------------------------------------
@@ -1374,8 +1351,8 @@ template <bool PRIMARY> void FixPEJumpAsync::slow_jumps_as(double *mag, double *
 {
   double **v = atom->v;
   double **jump = two_step->jump();
-  double **facc = state->vec(facc_field);
-  double **fstart = (PRIMARY && rule->reuses_start_node()) ? state->vec(fstart_coarse_field)
+  double **facc = state->vec(field.facc);
+  double **fstart = (PRIMARY && rule->reuses_start_node()) ? state->vec(field.fstart_coarse)
                                                            : nullptr;
   const auto begin = rule->start_sum();
   const double coarse = update->dt;
@@ -1476,7 +1453,7 @@ void FixPEJumpAsync::change_clocks()
     grow_work();
     double **total = work->get(SUM);
     double **fstart = two_step->fstart();
-    double **fstart_coarse = state->vec(fstart_coarse_field);
+    double **fstart_coarse = state->vec(field.fstart_coarse);
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) total[i][k] = fstart[i][k] + fstart_coarse[i][k];
     restart_jumps(to_fine, total);
@@ -1544,7 +1521,7 @@ void FixPEJumpAsync::restart_jumps(const std::vector<int> &to_fine, double **f)
 void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   if (with_start) {
-    double **facc = state->vec(facc_field);
+    double **facc = state->vec(field.facc);
     for (int i = 0; i < atom->nlocal; i++)
       for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
   }
@@ -1569,9 +1546,9 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
     // Lobatto rules: the first coarse step begins with half the impulse of
     // the other fixes' forces at q^0, which all of them have added only
     // when the first step begins (those defined after this fix act after
-    // its setup): the interactions' forces wait in end_impulse_field until then
-    if (with_start && (end_impulse_field >= 0) && others->add_forces()) {
-      double **pending = state->vec(end_impulse_field);
+    // its setup): the interactions' forces wait in field.end_impulse until then
+    if (with_start && (field.end_impulse >= 0) && others->add_forces()) {
+      double **pending = state->vec(field.end_impulse);
       double **f = atom->f;
       for (int i = 0; i < atom->nlocal; i++)
         for (int k = 0; k < 3; k++) pending[i][k] = -f[i][k];
@@ -1674,7 +1651,7 @@ void FixPEJumpAsync::restart(char *buf)
   clock_assignment->restore(&list[CLOCKS], &list[FAST_SEEN], &list[BUFFER_REACH]);
   if (head & HEAD_DYNAMIC) clock_assignment->restored_from_dynamic();
   // (the per-atom fields may hold the second half of an impulse)
-  impulse_pending = (end_impulse_field >= 0);
+  impulse_pending = (field.end_impulse >= 0);
   damping->set_kicked((head & DAMP_KICKED) != 0);
   if (head & DAMP_FIELDS) damping->allocate();
   damping->set_history(((head & DAMP_FINE) != 0) && two_step->has_started(), FINE_CLOCK);

@@ -121,16 +121,25 @@ class FixPEJumpAsync : public Fix {
   // and (Lobatto rules) the half of the other fixes' impulse at the coarse
   // node that the next coarse step begins with
   // and the coarse quadrature sum of a slow atom's coarse interactions
-  int facc_field, fstart_coarse_field, end_impulse_field, fcoarse_field;
+  // the per-atom state fields (AtomState): the fine quadrature sum, the
+  // coarse start node's forces (rules that reuse it), the impulse of the end
+  // node that waits for the next coarse step (Lobatto rules; -1 if none),
+  // the coarse quadrature sum
+  struct {
+    int facc, fstart_coarse, end_impulse, fcoarse;
+  } field;
+  // the coarse step in progress
+  struct StepNow {
+    double end_time = 0.0;        // update->atime of its end
+    bool lists_forced = false;    // LAMMPS builds the lists in it whatever the atoms do
+    double speed2 = 0.0;          // largest |v|^2 of the moving atoms
+    double change = 0.0;          // largest velocity change of an atom over a fine step
+  } step_now;
 
   PEJump::Evaluations *evals;    // force evaluations
   int changes_seen;              // another fix changed a velocity (this rank)
-  double fine_speed2;            // largest |v|^2 of the moving atoms in this coarse step
-  double fine_change;            // largest velocity change of an atom over a fine step
   bool reverse_copy;             // the reverse communication sums COPY
   bigint builds_inside;          // list builds inside coarse steps (this run)
-  bool lists_forced;             // LAMMPS builds the lists in this step whatever the atoms do
-  double end_time;               // update->atime of the coarse step's end
   bool impulse_at_start;         // the end impulse field holds -F(q^0) until the first step
   bool impulse_pending;          // the end impulse field may hold an impulse (else it is 0)
 
@@ -158,7 +167,6 @@ class FixPEJumpAsync : public Fix {
   void continue_scheme();
   void node_impulses();
   void refuse_velocity_changes();    // an error if another fix changed a velocity
-  void note_damping(bool from_now) const;
 
   // one coarse step: the fine steps up to the primary coarse node, where
   // the MD step evaluates the coarse interactions, then the rest
@@ -180,7 +188,6 @@ class FixPEJumpAsync : public Fix {
   void add_fine_forces_at_end();
   void slow_jumps(double *mag, double **fprimary);
   template <bool PRIMARY> void slow_jumps_as(double *mag, double **fcoarse);
-  bool finish_check(const double *local);
   std::string instability_advice() const;
   void watch_growth();
   void slow_magnitudes();

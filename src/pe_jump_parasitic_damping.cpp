@@ -13,8 +13,10 @@
 
 #include "pe_jump_parasitic_damping.h"
 
+#include "comm.h"
 #include "lammps.h"
 #include "pe_jump_atom_state.h"
+#include "update.h"
 #include "utils.h"
 
 #include <algorithm>
@@ -112,10 +114,11 @@ void ParasiticDamping::forget_history()
 
 /* ---------------------------------------------------------------------- */
 
-void ParasiticDamping::note(LAMMPS *lmp, const char *style, long from_step) const
+void ParasiticDamping::note(LAMMPS *lmp, const char *style, bool from_now) const
 {
-  const std::string when = (from_step < 0) ? std::string("in this run")
-                                           : fmt::format("from step {}", from_step);
+  if (lmp->comm->me != 0) return;
+  const std::string when = from_now ? fmt::format("from step {}", lmp->update->ntimestep)
+                                    : std::string("in this run");
   utils::logmesg(
       lmp, "Fix {}: damp auto damps the parasitic mode over {} steps {} (a thermostat acts)\n",
       style, AUTO_STEPS, when);

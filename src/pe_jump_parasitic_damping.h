@@ -69,10 +69,10 @@ namespace PEJump {
     // starts damping there, and remembers it for the following runs)
     bool awaits_impulse() const { return damp_auto && thermostatted && !ever_changed; }
     double beta(double h) const;
-    // damp auto damps in this run (from_step < 0) or from that step on:
-    // the log says so (the damping changes the trajectory at second order
-    // in the time step; damp 0 turns it off)
-    void note(LAMMPS *, const char *style, long from_step) const;
+    // damp auto damps in this run or from this step on: the log says so
+    // (the damping changes the trajectory at second order in the time
+    // step; damp 0 turns it off)
+    void note(LAMMPS *, const char *style, bool from_now) const;
 
     // the state fields: h <F> and P of the last step per atom (nullptr
     // before a run that may damp), valid if the clock's last step was

@@ -21,6 +21,7 @@
 #include "neighbor.h"
 #include "output.h"
 #include "pe_jump_errors.h"
+#include "pe_jump_parasitic_damping.h"
 #include "pe_jump_quadrature.h"
 #include "update.h"
 
@@ -285,15 +286,15 @@ StabilityGuard::Verdict StabilityGuard::judge(const double *global)
 
 /* ---------------------------------------------------------------------- */
 
-bool StabilityGuard::conclude(const char *style, const double *local, double &flag,
+bool StabilityGuard::conclude(const char *style, const double *local, ParasiticDamping &damping,
                               const std::function<const double *()> &energies,
                               const std::function<std::string()> &advice)
 {
   double values[NMEASURES + 1], global[NMEASURES + 1];
   for (int k = 0; k < NMEASURES; k++) values[k] = local[k];
-  values[NMEASURES] = flag;
+  values[NMEASURES] = damping.take_impulse();
   MPI_Allreduce(values, global, NMEASURES + 1, MPI_DOUBLE, MPI_MAX, world);
-  flag = global[NMEASURES];
+  if (damping.impulse_anywhere(global[NMEASURES] > 0.0)) damping.note(lmp, style, true);
 
   Verdict verdict = judge(global);
   if ((verdict == UNSTABLE) && (growth() >= STOP_GROWTH)) {

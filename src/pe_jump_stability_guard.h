@@ -24,6 +24,7 @@
 
 namespace LAMMPS_NS {
 namespace PEJump {
+  class ParasiticDamping;
   class Quadrature;
 
   // Before the atoms move in a step: the nodes where forces will be taken
@@ -129,12 +130,14 @@ namespace PEJump {
     Verdict judge(const double *global);    // the reduced measures
     double growth() const { return last_growth; }
 
-    // reduce the local measures and one more value (flag: in local, out
-    // global, MAX) over the ranks and act on the verdict: an error if the
-    // scheme is unstable or atoms move too far; true if a list rebuild is
-    // due. energies() gives the pseudo-kinetic and the jump energy of the
-    // group (TwoStep::energies, collective), advice() the hint of the error
-    bool conclude(const char *style, const double *local, double &flag,
+    // the end of a step's check, in both fixes: reduce the local measures
+    // over the ranks, with damping's flag of a velocity changed by another
+    // fix (damp auto may start damping there: the log says so), and act
+    // on the verdict: an error if the scheme is unstable or atoms move too
+    // far; true if a list rebuild is due. energies() gives the
+    // pseudo-kinetic and the jump energy of the group (TwoStep::energies,
+    // collective), advice() the hint of the error
+    bool conclude(const char *style, const double *local, ParasiticDamping &damping,
                   const std::function<const double *()> &energies,
                   const std::function<std::string()> &advice);
 
