@@ -226,6 +226,7 @@ void FixPEJump::init()
   if (step_control->adapts()) refuse_step_counters();
 
   others->sort(*sampler);
+  sampler->refuse_accelerators(style);
   sampler->refuse_velocity_forces(style, rule->name(), rule->only_end_nodes());
   sampler->refuse_stateful_forces(style, rule->name(), rule->only_end_nodes());
 

@@ -216,6 +216,7 @@ void FixPEJumpAsync::init()
   two_step->init(style);
   guard->refuse_zero_skin(style, false, "the coarse clock");
   others->sort(*sampler);
+  sampler->refuse_accelerators(style);
   sampler->refuse_velocity_forces(style, rule->name(), false);
   refuse_unsplittable();
   refuse_other_fixes();

@@ -23,6 +23,8 @@
 #include "force.h"
 #include "improper.h"
 #include "kspace.h"
+#include "lammps.h"
+#include "modify.h"
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
@@ -97,6 +99,22 @@ void ForceSampler::refuse_stateful_forces(const char *style, const std::string &
              "Fix {} with quadrature {}: pair style {} advances the state of its bonds at every "
              "force evaluation{}",
              style, rule, force->pair_style, errorurl(32));
+}
+
+/* ----------------------------------------------------------------------
+   the packages by the style of the fix that their package command makes
+   (KOKKOS: by its instance, which -k on makes)
+------------------------------------------------------------------------- */
+
+void ForceSampler::refuse_accelerators(const char *style) const
+{
+  static constexpr const char *PACKAGE_FIXES[] = {"GPU", "INTEL"};
+  std::string package;
+  if (lmp->kokkos) package = "KOKKOS";
+  for (const char *name : PACKAGE_FIXES)
+    if (!modify->get_fix_by_style(fmt::format("^{}$", name)).empty()) package = name;
+  if (!package.empty())
+    error->all(FLERR, "Fix {} does not support the {} package{}", style, package, errorurl(67));
 }
 
 /* ---------------------------------------------------------------------- */

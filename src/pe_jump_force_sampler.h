@@ -66,6 +66,12 @@ namespace PEJump {
     // advances (peridynamics) unless the rule evaluates only at step ends
     void refuse_stateful_forces(const char *style, const std::string &rule, bool end_nodes) const;
 
+    // an error with an accelerator package whose styles compute forces on
+    // a device or into buffers of their own, which only LAMMPS' MD loop
+    // collects (GPU, INTEL, KOKKOS): the fix's own evaluations would miss
+    // them. The /omp and /opt styles are fine
+    void refuse_accelerators(const char *style) const;
+
     // forward-communicate positions, clear forces, run the pre_force stage
     // of the other fixes, compute the contributions in mask with the given
     // energy/virial flags, reverse-communicate forces, and let the

@@ -21,8 +21,9 @@ wrong; the exit status is the number of failed checks (0 = all passed).
   ```text <link>``` without its trailing underscore);
 * index: every fix style of src/ (``FixStyle(name, ...)``) has a
   ``.. index:: fix name`` entry in doc/*.rst (as LAMMPS' check-styles.py);
-* LAMMPS pages: with --lammps-doc (the doc/src folder of a LAMMPS source
-  tree), every page in doc/sphinx/lammps_pages.txt exists there.
+* LAMMPS pages: every page in doc/sphinx/lammps_pages.txt is linked from a
+  page; with --lammps-doc (the doc/src folder of a LAMMPS source tree),
+  every one exists there.
 """
 import argparse
 import glob
@@ -192,10 +193,8 @@ def main():
         for m in re.finditer(r':doc:`([^`]*)`', read(page)):
             target = re.search(r'<([^>]*)>\s*$', m.group(1))
             linked.add((target.group(1) if target else m.group(1)).strip())
-    unused = sorted(set(listed) - linked)
-    if unused:
-        print('note: listed in doc/sphinx/lammps_pages.txt but linked from no page: '
-              + ', '.join(unused))
+    report(f'LAMMPS pages in doc/sphinx/lammps_pages.txt ({len(listed)}) linked from a page',
+           [f'{p}: linked from no page' for p in sorted(set(listed) - linked)])
     if args.lammps_doc:
         if not os.path.isdir(args.lammps_doc):
             report('LAMMPS pages', [f'{args.lammps_doc} is not a folder'])

@@ -19,8 +19,8 @@ this tool
   [mpirun --oversubscribe --allow-run-as-root -np N] lmp -in in.<x> -var ...
   there, one run at a time;
 * compares all thermo tables (every numeric column, every row), the lines
-  written by `print` commands that contain numbers, and ERROR lines (without
-  their source location), and reports per log the number of thermo rows,
+  written by `print` commands that contain numbers, and ERROR and WARNING
+  lines (without their source location), and reports per log the number of thermo rows,
   whether the output is identical as printed and, if not, the first step where
   it differs and the largest relative difference per column.
 
@@ -240,7 +240,7 @@ def is_num(t):
 
 
 def parse_log(path, temps):
-    """thermo tables, print lines with numbers, ERROR lines of a log."""
+    """thermo tables, print lines with numbers, ERROR and WARNING lines of a log."""
     tables, prints, errors = [], [], []
     cur = None
     expect_header = False
@@ -270,6 +270,9 @@ def parse_log(path, temps):
         if line.startswith("ERROR"):
             errors.append(SRC_LOC_RE.sub("", line))
             cur = None
+            continue
+        if line.startswith("WARNING"):    # (inside a thermo table too)
+            errors.append(SRC_LOC_RE.sub("", line))
             continue
         if cur is None and NUM_IN_TEXT_RE.search(line) and \
                 any(t.fullmatch(line.rstrip()) for t in temps):
@@ -533,7 +536,7 @@ def main():
                 for msg in pmsgs:
                     print("    " + msg)
             if re_ or ne:
-                print("  ERROR lines: %d reference, %d new, %d identical "
+                print("  ERROR and WARNING lines: %d reference, %d new, %d identical "
                       "(source location ignored)" % (len(re_), len(ne), esame))
                 if not args.quiet:
                     for msg in emsgs:

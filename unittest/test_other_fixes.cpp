@@ -5,7 +5,10 @@
 #include "pe_jump_systems.h"
 
 #include "exceptions.h"
+#include "fix.h"
+#include "modify.h"
 #include "update.h"
+#include "utils.h"
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
@@ -406,6 +409,38 @@ TEST(PEJumpOtherFixes, VelocityDependentForcesNeedLobatto2)
 /* ----------------------------------------------------------------------
    fix setforce and fix freeze hold atoms exactly for every rule
 ------------------------------------------------------------------------- */
+
+/* ----------------------------------------------------------------------
+   accelerator packages whose styles compute forces on a device or into
+   buffers of their own, which only LAMMPS' MD loop collects, are refused
+   by both fixes: GPU and INTEL are found by the fix that their package
+   command makes. Neither package is in this build, so a fix without
+   hooks (property/atom) stands in for the package's fix, renamed to its
+   style; without the rename the same input runs
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, DeviceAcceleratorsAreRefused)
+{
+  for (const std::string package : {"GPU", "INTEL", ""})
+    for (const std::string fix : {"pe_jump", "pe_jump/async 2 all"}) {
+      Sim s;
+      ideal_gas(s);
+      s.cmds({"fix package all property/atom i_stand_in", "fix 1 all " + fix, "timestep 0.01"});
+      if (!package.empty()) {
+        LAMMPS_NS::Fix *stand_in = s.lmp->modify->get_fix_by_id("package");
+        delete[] stand_in->style;
+        stand_in->style = LAMMPS_NS::utils::strdup(package);
+      }
+      const std::string err = error_in(s, "run 2");
+      if (package.empty())
+        EXPECT_EQ(err, "no error") << fix;
+      else
+        EXPECT_THAT(err,
+                    ContainsRegex("Fix " + LAMMPS_NS::utils::split_words(fix)[0] +
+                                  " does not support the " + package + " package; see"))
+            << fix;
+    }
+}
 
 TEST(PEJumpOtherFixes, SetforceHoldsAtomsForEveryRule)
 {
