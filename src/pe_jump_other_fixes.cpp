@@ -503,9 +503,19 @@ void OtherFixes::refuse_interactions(const char *rule_name) const
         if (cross(i, list->firstneigh[i][jj] & NEIGHMASK)) local = 1;
     }
   }
-  if (atom->molecular != Atom::ATOMIC)
-    for (int n = 0; (n < neighbor->nbondlist) && !local; n++)
-      if (cross(neighbor->bondlist[n][0], neighbor->bondlist[n][1])) local = 1;
+  // bonds, angles, dihedrals, impropers: atoms of both sets in one of them
+  const auto topology_crosses = [&](int **list, int n, int natoms) {
+    for (int m = 0; m < n; m++)
+      for (int a = 0; a < natoms; a++)
+        for (int b = a + 1; b < natoms; b++)
+          if (cross(list[m][a], list[m][b])) return 1;
+    return 0;
+  };
+  if ((atom->molecular != Atom::ATOMIC) && !local)
+    local = topology_crosses(neighbor->bondlist, neighbor->nbondlist, 2) ||
+        topology_crosses(neighbor->anglelist, neighbor->nanglelist, 3) ||
+        topology_crosses(neighbor->dihedrallist, neighbor->ndihedrallist, 4) ||
+        topology_crosses(neighbor->improperlist, neighbor->nimproperlist, 4);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   if (global)

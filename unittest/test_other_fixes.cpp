@@ -837,6 +837,46 @@ TEST(PEJumpOtherFixes, OtherIntegratorsOnInteractingAtoms)
    start-node forces, which it keeps for its own atoms only: NaN)
 ------------------------------------------------------------------------- */
 
+/* ----------------------------------------------------------------------
+   the same through an angle alone (no bond or pair between the two
+   integrators' atoms): three atoms, one angle, fix nve on the third
+------------------------------------------------------------------------- */
+
+TEST(PEJumpOtherFixes, OtherIntegratorsLinkedByAnAngleOnly)
+{
+  const auto outcome = [](const std::string &rule) {
+    Sim s;
+    s.cmds({"units lj",
+            "atom_style angle",
+            "atom_modify map array",
+            "boundary f f f",
+            "region box block -5 5 -5 5 -5 5",
+            "create_box 1 box angle/types 1 extra/angle/per/atom 1",
+            "create_atoms 1 single -1.0 0.0 0.0",
+            "create_atoms 1 single 0.0 0.1 0.0",
+            "create_atoms 1 single 1.0 0.0 0.0",
+            "mass 1 1.0",
+            "angle_style harmonic",
+            "angle_coeff 1 10.0 120.0",
+            "create_bonds single/angle 1 1 2 3",
+            "neighbor 0.3 bin",
+            "comm_modify cutoff 3.0",
+            "group mine id 1 2",
+            "group theirs id 3",
+            "fix 1 mine pe_jump quadrature " + rule,
+            "fix 2 theirs nve",
+            "timestep 0.005",
+            "thermo 0"});
+    return error_in(s, "run 10");
+  };
+  for (const std::string rule : {"midpoint", "lobatto 3"})
+    EXPECT_THAT(outcome(rule),
+                ContainsRegex("atoms of another time integrator interact with its "
+                              "atoms at step"))
+        << rule;
+  EXPECT_EQ(outcome("lobatto 2"), "no error");
+}
+
 TEST(PEJumpOtherFixes, OtherIntegratorsOnSeparateAtomsAreAllowed)
 {
   auto c1_positions = [](const std::string &second) {
