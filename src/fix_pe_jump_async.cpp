@@ -44,7 +44,6 @@
 #include "modify.h"
 #include "neighbor.h"
 #include "pair.h"
-#include "pe_jump_async_clocks.h"
 #include "pe_jump_atom_state.h"
 #include "pe_jump_clock_assignment.h"
 #include "pe_jump_errors.h"
@@ -59,6 +58,7 @@
 #include "pe_jump_quadrature.h"
 #include "pe_jump_split_tally.h"
 #include "pe_jump_stability_guard.h"
+#include "pe_jump_two_clocks.h"
 #include "pe_jump_two_step.h"
 #include "pe_jump_work_forces.h"
 #include "timer.h"
@@ -69,7 +69,6 @@
 
 using namespace LAMMPS_NS;
 using namespace FixConst;
-using PEJump::AsyncClocks;
 using PEJump::AtomState;
 using PEJump::ClockAssignment;
 using PEJump::ForceSampler;
@@ -78,6 +77,7 @@ using PEJump::NodeSampler;
 using PEJump::OtherFixes;
 using PEJump::Quadrature;
 using PEJump::StabilityGuard;
+using PEJump::TwoClocks;
 
 // nodes closer than this (in fine steps) are the same
 static constexpr double SAME_NODE = 1.0e-9;
@@ -152,7 +152,7 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   clock_assignment = new ClockAssignment(
       lmp, this, arg[4], {opts->buffer_layers, opts->buffer_reach}, opts->fast_auto > 0.0);
   classes = new PEJump::ClockClasses(lmp, *state);
-  clocks = new AsyncClocks(nfine);
+  clocks = new TwoClocks(nfine);
   split = new InteractionSplit(lmp, groupbit, clock_assignment->clock_bit());
 
   time_integrate = 1;

@@ -27,7 +27,7 @@ FixStyle(pe_jump/async,FixPEJumpAsync);
 
 namespace LAMMPS_NS {
 namespace PEJump {
-  class AsyncClocks;
+  class TwoClocks;
   struct AtomSet;
   class AtomState;
   class ClockAssignment;
@@ -110,7 +110,7 @@ class FixPEJumpAsync : public Fix {
   PEJump::OtherFixes *others;
   PEJump::SplitTally *tally;
   PEJump::InteractionSplit *split;
-  PEJump::AsyncClocks *clocks;
+  PEJump::TwoClocks *clocks;
   PEJump::ClockAssignment *clock_assignment;
   PEJump::ClockClasses *classes;
   PEJump::WorkForces *work;

@@ -504,7 +504,9 @@ void OtherFixes::refuse_interactions(const char *rule_name) const
     }
   }
   // bonds, angles, dihedrals, impropers: atoms of both sets in one of them
-  const auto topology_crosses = [&](int **list, int n, int natoms) {
+  // (LAMMPS sets a topology list's length only where the style is defined)
+  const auto topology_crosses = [&](bool style, int **list, int n, int natoms) {
+    if (!style) return 0;
     for (int m = 0; m < n; m++)
       for (int a = 0; a < natoms; a++)
         for (int b = a + 1; b < natoms; b++)
@@ -512,10 +514,10 @@ void OtherFixes::refuse_interactions(const char *rule_name) const
     return 0;
   };
   if ((atom->molecular != Atom::ATOMIC) && !local)
-    local = topology_crosses(neighbor->bondlist, neighbor->nbondlist, 2) ||
-        topology_crosses(neighbor->anglelist, neighbor->nanglelist, 3) ||
-        topology_crosses(neighbor->dihedrallist, neighbor->ndihedrallist, 4) ||
-        topology_crosses(neighbor->improperlist, neighbor->nimproperlist, 4);
+    local = topology_crosses(force->bond, neighbor->bondlist, neighbor->nbondlist, 2) ||
+        topology_crosses(force->angle, neighbor->anglelist, neighbor->nanglelist, 3) ||
+        topology_crosses(force->dihedral, neighbor->dihedrallist, neighbor->ndihedrallist, 4) ||
+        topology_crosses(force->improper, neighbor->improperlist, neighbor->nimproperlist, 4);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   if (global)

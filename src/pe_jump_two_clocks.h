@@ -11,23 +11,23 @@
    See the README file in the top-level LAMMPS directory.
 ------------------------------------------------------------------------- */
 
-#ifndef LMP_PE_JUMP_ASYNC_CLOCKS_H
-#define LMP_PE_JUMP_ASYNC_CLOCKS_H
+#ifndef LMP_PE_JUMP_TWO_CLOCKS_H
+#define LMP_PE_JUMP_TWO_CLOCKS_H
 
 namespace LAMMPS_NS {
 namespace PEJump {
 
-  // Where the clocks of pe_jump/async are inside one coarse step, which is
-  // one MD step: the coarse step H (the MD time step) holds K fine steps of
-  // h = H / K. The atoms that move on fine steps have done done() of them
+  // The fine and the coarse clock of pe_jump/async: where they are inside
+  // one coarse step, which is one MD step. The coarse step H (the MD time
+  // step) holds K fine steps of h = H / K. The atoms that move on fine steps have done done() of them
   // and are into() the next; the slow atoms outside fine interactions are
   // held at held() (times from the coarse step's start). Times inside the
   // coarse step are counted in fine steps where they are compared, so that
   // a node at K/2 fine steps is one whatever the rounding of H / K.
 
-  class AsyncClocks {
+  class TwoClocks {
    public:
-    explicit AsyncClocks(int nfine) : nfine(nfine) {}
+    explicit TwoClocks(int nfine) : nfine(nfine) {}
 
     int steps() const { return nfine; }
     void begin(double coarse_step)    // the coarse step begins: nothing done
