@@ -24,16 +24,6 @@ using ::testing::ContainsRegex;
 
 namespace {
 
-std::string error_from(Sim &s, const std::string &command)
-{
-  try {
-    s.cmd(command);
-  } catch (LAMMPSException &e) {
-    return e.what();
-  }
-  return "no error";
-}
-
 // an LJ liquid of 864 atoms (density 0.8442) in which one atom in ten (or
 // light_fraction) is light (mass 1/25, type 2, group fast: 5 times the
 // speed of the others),
@@ -176,7 +166,7 @@ TEST(PEJumpAsyncOtherFixes, InsertionAndReflectionAreRefused)
     Sim s;
     light_atoms(s, "midpoint");
     s.cmds({"region top block 0 6 0 6 5 6", "fix 2 all deposit 10 1 5 4321 region top"});
-    EXPECT_THAT(error_from(s, "run 10"),
+    EXPECT_THAT(error_in(s, "run 10"),
                 ContainsRegex("cannot yet be combined with fix 2 "
                               "\\(deposit\\), which inserts atoms"));
   }
@@ -184,7 +174,7 @@ TEST(PEJumpAsyncOtherFixes, InsertionAndReflectionAreRefused)
     Sim s;
     light_atoms(s, "midpoint");
     s.cmds({"change_box all boundary p p f", "fix 2 all wall/reflect zlo EDGE"});
-    EXPECT_THAT(error_from(s, "run 10"),
+    EXPECT_THAT(error_in(s, "run 10"),
                 ContainsRegex("fix 2 \\(wall/reflect\\), which reverses velocities"));
   }
 }

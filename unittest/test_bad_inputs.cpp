@@ -142,7 +142,7 @@ std::string run_case(const Case &c)
   int nprocs = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
   const std::string tag = "pe_jump_bad_np" + std::to_string(nprocs) + ".";
-  try {
+  const std::string caught = error_from([&] {
     set_up(s, c.system);
     for (auto command : c.commands) {
       for (size_t at; (at = command.find("pe_jump_bad.")) != std::string::npos;)
@@ -155,9 +155,8 @@ std::string run_case(const Case &c)
         s.cmd(command);
       }
     }
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    error = e.what();
-  }
+  });
+  if (caught != "no error") error = caught;
   const std::string out = want_log ? ::testing::internal::GetCapturedStdout() : "";
 
   if (LAMMPS_NS::utils::strmatch(c.outcome, "^error:")) {

@@ -33,17 +33,6 @@ using ::testing::ContainsRegex;
 using ::testing::Not;
 
 namespace {
-// the error a run stops with ("no error" if it runs)
-std::string error_from(const std::function<void()> &run)
-{
-  try {
-    run();
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    return e.what();
-  }
-  return "no error";
-}
-
 // LAMMPS' peri example, shortened: a sphere moving down at speed indents a
 // cylinder at rest (SI units); the kinetic energy after the run
 double peri_indentation(const std::string &pair, const std::string &coeff, const std::string &fix,
@@ -441,13 +430,8 @@ TEST(PEJump, InstabilityDetectedJustAboveCflLimit)
   s.cmd("fix 1 all pe_jump");
   s.cmd("timestep 0.102");
   s.cmd("thermo 1000");
-  std::string msg = "no error";
   ::testing::internal::CaptureStdout();
-  try {
-    s.cmd("run 20000 post no");
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    msg = e.what();
-  }
+  const std::string msg = error_in(s, "run 20000 post no");
   const std::string out = ::testing::internal::GetCapturedStdout();
   EXPECT_THAT(msg, ContainsRegex("Fix pe_jump is unstable at step [0-9]+"));
   // the log names the atom with the largest jump (one of the ring's 10)
@@ -1048,16 +1032,17 @@ TEST(PEJump, ChangesAfterReadRestartRestartTheScheme)
       for (const int anew : {0, 1}) {
         Sim s(MPI_COMM_WORLD, false);
         ::testing::internal::CaptureStdout();
-        try {
-          s.cmds({"read_restart " + file, "neighbor 0.3 bin",
-                  "neigh_modify every 1 delay 0 check yes", "thermo 0", "fix 1 all " + fix});
-          if (anew) s.cmd("unfix 1");
-          if (!change.empty()) s.cmd(change);
-          if (anew) s.cmd("fix 2 all " + fix);
-          s.cmd(fmt::format("run {} post no", 20 / K));
-        } catch (LAMMPS_NS::LAMMPSException &e) {
-          ADD_FAILURE() << e.what();
-        }
+        EXPECT_EQ(error_from([&] {
+                    s.cmds({"read_restart " + file, "neighbor 0.3 bin",
+                            "neigh_modify every 1 delay 0 check yes", "thermo 0",
+                            "fix 1 all " + fix});
+                    if (anew) s.cmd("unfix 1");
+                    if (!change.empty()) s.cmd(change);
+                    if (anew) s.cmd("fix 2 all " + fix);
+                    s.cmd(fmt::format("run {} post no", 20 / K));
+                  }),
+                  "no error")
+            << fix << ", " << change;
         out[anew] = ::testing::internal::GetCapturedStdout();
         x[anew] = unwrapped_positions(s);
       }

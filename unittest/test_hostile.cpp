@@ -130,12 +130,8 @@ TEST(PEJumpHostile, DeletedFastGroupIsNotReplacedSilently)
   s.cmds({"region f block 0 1 INF INF INF INF", "group fast region f",
           "fix 1 all pe_jump/async 5 fast", "timestep 0.025", "thermo 0", "run 1 post no",
           "group fast delete", "group other id 1:10"});
-  try {
-    s.cmd("run 1 post no");
-    ADD_FAILURE() << "the deleted fast group was not noticed";
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    EXPECT_THAT(e.what(), ContainsRegex("its fast group fast was deleted"));
-  }
+  EXPECT_THAT(error_in(s, "run 1 post no"), ContainsRegex("its fast group fast was deleted"))
+      << "the deleted fast group must be noticed";
 }
 
 /* ----------------------------------------------------------------------
@@ -280,11 +276,7 @@ TEST(PEJumpHostile, InstabilityStopsBeforeNaNWithOutputIntact)
       lj_liquid(s, 3);
       s.cmds({"region f block 0 1 INF INF INF INF", "group fast region f", "log " + log, fix,
               "timestep " + dt, "thermo 1", "thermo_modify flush yes"});
-      try {
-        s.cmd("run 2000 post no");
-      } catch (LAMMPS_NS::LAMMPSException &e) {
-        error = e.what();
-      }
+      error = error_in(s, "run 2000 post no");
     }
     EXPECT_THAT(error, ContainsRegex("is unstable at step [0-9]+|atoms move more than half"))
         << fix;
@@ -329,11 +321,8 @@ Continued changed_then_run(const std::string &fix, const std::vector<std::string
           fmt::format("timestep {}", 0.005 * K), "thermo 0",
           fmt::format("run {} post no", 40 / K)});
   s.cmds(change);
-  try {
-    s.cmd(fmt::format("run {} post no pre ", 60 / K) + pre);
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    return {{}, e.what()};
-  }
+  const std::string error = error_in(s, fmt::format("run {} post no pre ", 60 / K) + pre);
+  if (error != "no error") return {{}, error};
   return {unwrapped_positions(s), ""};
 }
 }    // namespace
@@ -376,13 +365,12 @@ namespace {
 std::string output_of(Sim &s, const std::vector<std::string> &commands)
 {
   ::testing::internal::CaptureStdout();
-  try {
+  const std::string error = error_from([&] {
     s.cmds(commands);
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    ::testing::internal::GetCapturedStdout();
-    return std::string("ERROR: ") + e.what();
-  }
-  return ::testing::internal::GetCapturedStdout();
+  });
+  const std::string out = ::testing::internal::GetCapturedStdout();
+  if (error != "no error") return "ERROR: " + error;
+  return out;
 }
 }    // namespace
 

@@ -129,11 +129,10 @@ TEST(PEJumpLammpsExamples, DepositBesideAnotherIntegratorIsRefusedAtSetup)
     Sim s;
     s.cmds({"variable integrator string \"pe_jump quadrature " + rule + "\"",
             "variable deposited string nve", "log none"});
-    try {
+    const std::string caught = error_from([&] {
       s.lmp->input->file((std::string(PEJUMP_INPUTS) + "/in.deposit").c_str());
-    } catch (LAMMPS_NS::LAMMPSException &e) {
-      error = e.what();
-    }
+    });
+    if (caught != "no error") error = caught;
     return std::make_pair(s.lmp->update->ntimestep, s.lmp->atom->natoms);
   };
   // (midpoint and Legendre rules are refused at init beside fix 5, wall/reflect)

@@ -130,12 +130,11 @@ Outcome run_case(const std::function<void(Sim &)> &build, int nsteps)
   Outcome o;
   s.cmds({"thermo 0", "run 0 post no"});
   const double j0 = std::max(s.vec("1", 1), 1e-300);
-  try {
+  const std::string error = error_from([&] {
     s.cmd("run " + std::to_string(nsteps) + " post no");
     o.jump_growth = s.vec("1", 1) / j0;
-  } catch (LAMMPS_NS::LAMMPSException &e) {
-    o.error = e.what();
-  }
+  });
+  if (error != "no error") o.error = error;
   for (int i = 0; i < s.lmp->atom->nlocal; ++i)
     for (int k = 0; k < 3; ++k)
       if (!std::isfinite(s.lmp->atom->x[i][k]) || !std::isfinite(s.lmp->atom->v[i][k]))
