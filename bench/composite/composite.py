@@ -568,15 +568,24 @@ def run_variant(name, var, c, args):
                 if rec["status"] == "ok" else f"UNSTABLE: {rec['error']}"))
     for run in runs.values():
         run["median"] = summarize(run["reps"])
-        for rec in run["reps"][1:]:      # keep the JSON small: the series of the first repetition only
-            for key in ("time", "etotal", "pseudo"):
-                rec.pop(key, None)
     return dict(fraction=frac, scene=scene, info=info, split_check=check, reference=ref, runs=runs,
                 summary=compare(runs))
 
 
 def slug(s):
     return s.replace(" ", "_").replace("=", "").replace("/", "_")
+
+
+def without_series(obj):
+    """obj without the thermo series (time, etotal, pseudo) of its runs: the
+    drifts and errors judged from them stay, the report reads only those
+    (keeps the stored results small)."""
+    if isinstance(obj, dict):
+        return {k: without_series(v) for k, v in obj.items()
+                if not (k in ("time", "etotal", "pseudo") and isinstance(v, list))}
+    if isinstance(obj, list):
+        return [without_series(v) for v in obj]
+    return obj
 
 
 def summarize(reps):
@@ -801,7 +810,7 @@ def measure(args):
                git_head=head, git_src_dirty=dirty, host={"ncpu": os.cpu_count()},
                tolerance={"pos_error": POS_TOL_REL * c["amp"], "drift": DRIFT_TOL}, quiet=dict(QUIET),
                duration_s=time.time() - t0, variants=variants)
-    B.save_json(os.path.join(RESULTS, f"{args.label}.json"), res)
+    B.save_json(os.path.join(RESULTS, f"{args.label}.json"), without_series(res))
     text = markdown(res)
     with open(os.path.join(RESULTS, f"{args.label}.md"), "w") as f:
         f.write(text)
@@ -815,7 +824,7 @@ def report(args):
     res = B.load_json(path)
     for v in res["variants"].values():
         v["summary"] = compare(v["runs"])
-    B.save_json(path, res)
+    B.save_json(path, without_series(res))
     text = markdown(res)
     with open(os.path.join(RESULTS, f"{args.label}.md"), "w") as f:
         f.write(text)
