@@ -115,16 +115,13 @@ class FixPEJumpAsync : public Fix {
   PEJump::ClockClasses *classes;
   PEJump::WorkForces *work;
 
-  // per-atom state fields: the sum of the fine forces on a slow atom over
-  // the fine steps done in this coarse step (force x time) and (Lobatto
-  // rules) the slow-interaction force at the coarse start node
-  // and (Lobatto rules) the half of the other fixes' impulse at the coarse
-  // node that the next coarse step begins with
-  // and the coarse quadrature sum of a slow atom's coarse interactions
-  // the per-atom state fields (AtomState): the fine quadrature sum, the
-  // coarse start node's forces (rules that reuse it), the impulse of the end
-  // node that waits for the next coarse step (Lobatto rules; -1 if none),
-  // the coarse quadrature sum
+  // the per-atom state fields (AtomState): facc the sum of the fine forces
+  // on a slow atom over the fine steps done in this coarse step (force x
+  // time); fstart_coarse the coarse interactions' force at the coarse start
+  // node (rules that reuse it, else -1); end_impulse the impulse at the
+  // coarse end node that the next coarse step begins with (Lobatto rules,
+  // else -1); fcoarse the coarse quadrature sum of a slow atom's coarse
+  // interactions
   struct {
     int facc, fstart_coarse, end_impulse, fcoarse;
   } field;
