@@ -394,8 +394,9 @@ template <typename In> void id_signature(const Atom *atom, MPI_Comm world, In in
 }    // namespace
 
 /* ----------------------------------------------------------------------
-   fast auto TOL (jump: the jumps [v]^n, nfine: K): at a coarse node, the atoms of the fix group that would
-   move by more than TOL times the neighbor skin over a coarse step on the
+   fast auto TOL (jump: the jumps [v]^n, nfine: K): at a coarse node, the
+   atoms of the fix group that would move by more than TOL times the
+   neighbor skin over a coarse step on the
    coarse clock, h_S |v^n + (h_S/h) [v]^n/2| with h their present step (the
    free flight of their next step with the jump fitted to the coarse
    step), go on the fine clock; those on it stay while they would move by

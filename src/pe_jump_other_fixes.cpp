@@ -514,10 +514,12 @@ void OtherFixes::refuse_interactions(const char *rule_name) const
     return 0;
   };
   if ((atom->molecular != Atom::ATOMIC) && !local)
-    local = topology_crosses(force->bond, neighbor->bondlist, neighbor->nbondlist, 2) ||
-        topology_crosses(force->angle, neighbor->anglelist, neighbor->nanglelist, 3) ||
-        topology_crosses(force->dihedral, neighbor->dihedrallist, neighbor->ndihedrallist, 4) ||
-        topology_crosses(force->improper, neighbor->improperlist, neighbor->nimproperlist, 4);
+    local = topology_crosses(force->bond != nullptr, neighbor->bondlist, neighbor->nbondlist, 2) ||
+        topology_crosses(force->angle != nullptr, neighbor->anglelist, neighbor->nanglelist, 3) ||
+        topology_crosses(force->dihedral != nullptr, neighbor->dihedrallist,
+                         neighbor->ndihedrallist, 4) ||
+        topology_crosses(force->improper != nullptr, neighbor->improperlist,
+                         neighbor->nimproperlist, 4);
   int global = 0;
   MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, world);
   if (global)

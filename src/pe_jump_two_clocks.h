@@ -19,11 +19,12 @@ namespace PEJump {
 
   // The fine and the coarse clock of pe_jump/async: where they are inside
   // one coarse step, which is one MD step. The coarse step H (the MD time
-  // step) holds K fine steps of h = H / K. The atoms that move on fine steps have done done() of them
-  // and are into() the next; the slow atoms outside fine interactions are
-  // held at held() (times from the coarse step's start). Times inside the
-  // coarse step are counted in fine steps where they are compared, so that
-  // a node at K/2 fine steps is one whatever the rounding of H / K.
+  // step) holds K fine steps of h = H / K. The atoms that move on fine
+  // steps have done done() of them and are into() the next; the slow atoms
+  // outside fine interactions are held at held() (times from the coarse
+  // step's start). Times inside the coarse step are counted in fine steps
+  // where they are compared, so that a node at K/2 fine steps is one
+  // whatever the rounding of H / K.
 
   class TwoClocks {
    public:

@@ -1008,8 +1008,9 @@ TEST(PEJump, NewForceFieldBetweenRunsRestartsTheScheme)
 /* ----------------------------------------------------------------------
    the census of a run's end travels in restart files written between
    runs: a force field or masses changed after read_restart restart the
-   scheme as in one session (LAMMPS itself refuses to move atoms there) (a new pair_coeff there was not seen: 1.6e-2
-   relative in the thermo output against the fix defined anew), and an
+   scheme as in one session (LAMMPS itself refuses to move atoms there;
+   a new pair_coeff there was not seen: 1.6e-2 relative in the thermo
+   output against the fix defined anew), and an
    unchanged continuation stays exact (no restart)
 ------------------------------------------------------------------------- */
 
