@@ -45,6 +45,7 @@
 #include "neighbor.h"
 #include "pair.h"
 #include "pe_jump_atom_state.h"
+#include "pe_jump_centre_velocity.h"
 #include "pe_jump_clock_assignment.h"
 #include "pe_jump_errors.h"
 #include "pe_jump_force_sampler.h"
@@ -70,6 +71,7 @@
 using namespace LAMMPS_NS;
 using namespace FixConst;
 using PEJump::AtomState;
+using PEJump::CentreVelocity;
 using PEJump::ClockAssignment;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
@@ -140,12 +142,13 @@ FixPEJumpAsync::FixPEJumpAsync(LAMMPS *lmp, int narg, char **arg) :
   others = new OtherFixes(lmp, this);
   tally = new PEJump::SplitTally(lmp);
   growth = new PEJump::GrowthWatch();
-  work = new PEJump::WorkForces(lmp, 2);
+  work = new PEJump::WorkForces(lmp, 3);
   state = new AtomState(lmp);
   two_step = new PEJump::TwoStep(lmp, *state, rule->reuses_start_node());
   field.facc = state->add("facc", 3, 0.0);
   field.fstart_coarse = rule->reuses_start_node() ? state->add("fstart_coarse", 3, 0.0) : -1;
   field.end_impulse = rule->has_end_nodes() ? state->add("end_impulse", 3, 0.0) : -1;
+  field.half_impulse = rule->has_end_nodes() ? -1 : state->add("half_impulse", 3, 0.0);
   field.fcoarse = state->add("fcoarse", 3, 0.0);
   damping = new PEJump::ParasiticDamping(*state);
   ghosts = new PEJump::MovingGhosts(lmp, this);
@@ -233,7 +236,6 @@ void FixPEJumpAsync::init()
   others->refuse_for_rule(rule->name(), primary_at_end, rule->only_end_nodes());
   others->warn_step_number(rule->name(), primary_at_end, rule->only_end_nodes());
   others->warn_energy_inside_step(rule->name(), primary_at_end);
-  others->warn_langevin_inside_step(rule->name(), primary_at_end);
   split->start_run();
   tally->init();
   clock_assignment->find_groups();
@@ -914,7 +916,6 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
   const double h = clocks->fine_step();
   const double into = clocks->into();
   if (check_fine_nodes(into)) build_lists_now();
-  move_moving(rule->node[rule->primary()] * h - into);
 
   // the evaluations clear and keep the forces of the atoms they act on only
   // (and communicate those atoms' ghost copies only)
@@ -922,22 +923,49 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
                                      ghosts->usable() ? ghosts : nullptr};
   split->activate(InteractionSplit::FINE);
   sampler->only_touch(&moving);
+  const bool walk = walks_inner_nodes();
+  if (walk) walk_inner_nodes(into);
+  move_moving(rule->node[rule->primary()] * h - (walk ? rule->node[rule->size() - 2] * h : into));
   const bool at_end = tally->expected() && (clocks->done() + 1 == clocks->steps());
   sampler->compute(ForceSampler::ALL, at_end ? ENERGY_GLOBAL : 0, 0);
   if (at_end) tally->keep();
   evals->step += node_cost();
-  if (rule->size() > 1) fine_quadrature_sum();
+  if (rule->size() > 1) fine_quadrature_sum(walk);
   sampler->only_touch(nullptr);
   split->restore();
 
   double mag[2] = {0.0, 0.0};
-  const double ahead = next_ahead ? rule->node[rule->primary()] * h : -1.0;
+  const double first = rule->node[walk ? rule->first_sampled() : rule->primary()];
+  const double ahead = next_ahead ? first * h : -1.0;
   finish_fine_step((rule->size() > 1) ? work->get(SUM) : atom->f, ahead, mag);
   step_now.speed2 = MAX(step_now.speed2, mag[0]);
   step_now.change = MAX(step_now.change, mag[1]);
   guard->set_stats(step_now.speed2, step_now.change);
   clocks->fine_step_done();
-  if (ahead > 0.0) clocks->moved_to(clocks->done() + rule->node[rule->primary()]);
+  if (ahead > 0.0) clocks->moved_to(clocks->done() + first);
+}
+
+/* ----------------------------------------------------------------------
+   a rule with end nodes and nodes between them (lobatto 3 and up): the
+   atoms that move on fine steps go through the nodes between in order,
+   from where they are in the step, before its primary node, the end
+   (nothing to keep and put back)
+------------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::walks_inner_nodes() const
+{
+  return rule->has_end_nodes() && (rule->size() > 2);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixPEJumpAsync::walk_inner_nodes(double into)
+{
+  const AtomList &moving = clock_assignment->moving_atoms;
+  const int evaluated = node_sampler->walk_nodes(
+      *rule, rule->first_sampled(), rule->size() - 2, clocks->fine_step(), into, free_flight(),
+      group_atoms(&moving), opts->sample_mask, work->get(SUM));
+  evals->step += evaluated * node_cost();
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1061,15 +1089,20 @@ void FixPEJumpAsync::lists_fit_step_end()
 void FixPEJumpAsync::pre_force(int /*vflag*/)
 {
   split->activate(InteractionSplit::COARSE);
+  if (!shows_centre_velocities()) return;
+  grow_work();    // (atoms may have come with the list build)
+  CentreVelocity::show(group_atoms(), atom->mask, atom->nlocal, atom->v,
+                       state->vec(field.half_impulse), work->get(VFREE));
 }
 
 /* ----------------------------------------------------------------------
    fsum = sum_k w_k F_fine(q_k) for the atoms that move on fine steps; the
    primary node p was evaluated (atom->f), a Lobatto start node is the
-   previous fine step's end node
+   previous fine step's end node; walked: the nodes between were summed
+   (walk_inner_nodes())
 ------------------------------------------------------------------------- */
 
-void FixPEJumpAsync::fine_quadrature_sum()
+void FixPEJumpAsync::fine_quadrature_sum(bool walked)
 {
   const int p = rule->primary();
   const bool reuse_start = rule->reuses_start_node();
@@ -1078,10 +1111,10 @@ void FixPEJumpAsync::fine_quadrature_sum()
   double **fsum = work->get(SUM);
   const AtomList &moving = clock_assignment->moving_atoms;
 
-  const auto begin = rule->start_sum();
+  const auto begin = rule->start_sum(walked);
   for (const int i : moving) begin(f[i], reuse_start ? fstart[i] : nullptr, fsum[i]);
   const int first = rule->first_sampled();
-  if (rule->size() - first <= 1) return;
+  if (walked || (rule->size() - first <= 1)) return;
   const double h = clocks->fine_step();
   const int evaluated =
       node_sampler->sum_nodes(*rule, first, p, h, -rule->node[p] * h, free_flight(),
@@ -1128,6 +1161,9 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double ahead, double *mag)
 void FixPEJumpAsync::final_integrate()
 {
   update->atime = step_now.end_time;
+  if (shows_centre_velocities())
+    CentreVelocity::take_back(group_atoms(), atom->mask, atom->nlocal, atom->v,
+                              state->vec(field.half_impulse), work->get(VFREE));
   grow_work();
   if (watch(OtherFixes::INSIDE_STEP)) {
     if (two_step->any_changed(group_atoms())) changes_seen = 1;
@@ -1228,10 +1264,11 @@ void FixPEJumpAsync::keep_coarse_primary(double **f)
    acted on by the force-replacing fixes as the total was): every atom of
    the group gets the impulse h_S R/m there. Inside the coarse step (the
    midpoint and Legendre rules: position Verlet for these forces) on its
-   free-flight velocity, which carries it on; at the end node (Lobatto
-   rules: velocity Verlet) half on the node velocity there and half as the
-   next coarse step begins (field.end_impulse). Returns the coarse interactions'
-   forces.
+   free-flight velocity, which carries it on, half of it kept for the
+   velocities that the other fixes see at the next primary node
+   (field.half_impulse); at the end node (Lobatto rules: velocity Verlet)
+   half on the node velocity there and half as the next coarse step begins
+   (field.end_impulse). Returns the coarse interactions' forces.
 ------------------------------------------------------------------------- */
 
 double **FixPEJumpAsync::coarse_forces_apart()
@@ -1253,16 +1290,19 @@ double **FixPEJumpAsync::coarse_forces_apart()
   double **f = atom->f;
   double **v = atom->v;
   double **pending = (field.end_impulse >= 0) ? state->vec(field.end_impulse) : nullptr;
+  double **half = (field.half_impulse >= 0) ? state->vec(field.half_impulse) : nullptr;
   impulse_pending = (pending != nullptr);
   const double kick = update->dt * force->ftm2v;
   group_atoms().each(atom->mask, nlocal, [&](int i) {
     const double scale = kick * two_step->inverse_mass_of(i);
     for (int k = 0; k < 3; k++) {
       const double dv = scale * (f[i][k] - fcoarse[i][k]);
-      if (pending)
+      if (pending) {
         pending[i][k] = 0.5 * dv;
-      else
+      } else {
         v[i][k] += dv;
+        half[i][k] = 0.5 * dv;
+      }
     }
   });
   return fcoarse;
@@ -1523,8 +1563,13 @@ void FixPEJumpAsync::start_scheme(const char *why, bool with_start)
 {
   if (with_start) {
     double **facc = state->vec(field.facc);
+    // (no impulse of other fixes before the first step)
+    double **half = (field.half_impulse >= 0) ? state->vec(field.half_impulse) : nullptr;
     for (int i = 0; i < atom->nlocal; i++)
-      for (int k = 0; k < 3; k++) facc[i][k] = 0.0;
+      for (int k = 0; k < 3; k++) {
+        facc[i][k] = 0.0;
+        if (half) half[i][k] = 0.0;
+      }
   }
   if (why && (comm->me == 0)) utils::logmesg(lmp, "Fix {}: {}\n", style, why);
   grow_work();
@@ -1690,7 +1735,18 @@ void FixPEJumpAsync::grow_work()
 
 int FixPEJumpAsync::needed_work() const
 {
-  return (1 << SUM) | (others->add_forces() ? 1 << COPY : 0);
+  return (1 << SUM) | (others->add_forces() ? 1 << COPY : 0) |
+      (shows_centre_velocities() ? 1 << VFREE : 0);
+}
+
+/* ----------------------------------------------------------------------
+   other fixes add forces, whose impulse sits at the primary coarse node
+   inside the coarse step: they see the velocities of CentreVelocity there
+------------------------------------------------------------------------- */
+
+bool FixPEJumpAsync::shows_centre_velocities() const
+{
+  return (field.half_impulse >= 0) && others->add_forces();
 }
 
 /* ----------------------------------------------------------------------

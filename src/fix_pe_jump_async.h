@@ -120,10 +120,11 @@ class FixPEJumpAsync : public Fix {
   // time); fstart_coarse the coarse interactions' force at the coarse start
   // node (rules that reuse it, else -1); end_impulse the impulse at the
   // coarse end node that the next coarse step begins with (Lobatto rules,
-  // else -1); fcoarse the coarse quadrature sum of a slow atom's coarse
-  // interactions
+  // else -1); half_impulse half the impulse of the other fixes' forces in
+  // the last coarse step (the other rules, else -1: CentreVelocity);
+  // fcoarse the coarse quadrature sum of a slow atom's coarse interactions
   struct {
-    int facc, fstart_coarse, end_impulse, fcoarse;
+    int facc, fstart_coarse, end_impulse, half_impulse, fcoarse;
   } field;
   // the coarse step in progress
   struct StepNow {
@@ -142,8 +143,10 @@ class FixPEJumpAsync : public Fix {
 
   // SUM: fine quadrature sum, COPY: the coarse interactions' forces at the
   // primary coarse node (owned and ghost atoms) apart from those that
-  // other fixes add
-  enum { SUM, COPY };
+  // other fixes add, VFREE: the free-flight velocities while the other
+  // fixes see others there (CentreVelocity)
+  enum { SUM, COPY, VFREE };
+  bool shows_centre_velocities() const;
   void grow_work();
   int needed_work() const;
   PEJump::AtomSet group_atoms(const AtomList *only = nullptr) const;
@@ -175,7 +178,9 @@ class FixPEJumpAsync : public Fix {
   void lists_fit_step_end();
   void move_moving(double dt);
   void hold_until(double t);    // the slow atoms outside fine interactions move to t
-  void fine_quadrature_sum();
+  void fine_quadrature_sum(bool walked);
+  bool walks_inner_nodes() const;
+  void walk_inner_nodes(double into);
   void finish_fine_step(double **favg, double ahead, double *mag);
   void keep_coarse_primary(double **fcoarse);
   double **coarse_forces_apart();

@@ -182,33 +182,61 @@ int NodeSampler::sum_nodes_in(Keep & /*keep*/, const Quadrature &rule, int first
                               double scale, double offset, const FreeFlight &v, const AtomSet &set,
                               int mask, double **acc, double **fend, bool onto_acc)
 {
-  double **f = atom->f;
   const int last = rule.size() - 1;
   int evaluated = 0;
   for (int node = first; node <= last; node++) {
     if (node == skip) continue;
     evaluate_at(scale * rule.node[node] + offset, v, set, mask);
-    const double w = rule.weight[node];
-    const bool at_end = fend && (node == last);
-    const auto add = [&](int i) {
-      acc[i][0] += w * f[i][0];
-      acc[i][1] += w * f[i][1];
-      acc[i][2] += w * f[i][2];
-      if (at_end)
-        for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
-    };
-    const auto replace = [&](int i) {
-      for (int k = 0; k < 3; k++) acc[i][k] = w * f[i][k];
-      if (at_end)
-        for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
-    };
-    if (onto_acc || evaluated)
-      set.each(atom->mask, atom->nlocal, add);
-    else
-      set.each(atom->mask, atom->nlocal, replace);
+    add_node(rule.weight[node], set, acc, !onto_acc && !evaluated, (node == last) ? fend : nullptr);
     ++evaluated;
   }
   return evaluated;
+}
+
+/* ---------------------------------------------------------------------- */
+
+int NodeSampler::walk_nodes(const Quadrature &rule, int first, int last, double scale, double from,
+                            const FreeFlight &v, const AtomSet &set, int mask, double **acc)
+{
+  double **x = atom->x;
+  double at = from;
+  for (int node = first; node <= last; node++) {
+    const double dt = scale * rule.node[node] - at;
+    // (a step begun ahead has its atoms at the first node already)
+    if (dt != 0.0)
+      set.each(atom->mask, atom->nlocal, [&](int i) {
+        for (int k = 0; k < 3; k++) x[i][k] += dt * v(i, k);
+      });
+    at = scale * rule.node[node];
+    sampler->compute(mask, 0, 0);
+    ghosts_away = true;
+    add_node(rule.weight[node], set, acc, node == first, nullptr);
+  }
+  return MAX(last - first + 1, 0);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void NodeSampler::add_node(double w, const AtomSet &set, double **acc, bool replace,
+                           double **fend) const
+{
+  double **f = atom->f;
+  const auto add = [&](int i) {
+    acc[i][0] += w * f[i][0];
+    acc[i][1] += w * f[i][1];
+    acc[i][2] += w * f[i][2];
+    if (fend)
+      for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
+  };
+  const auto set_to = [&](int i) {
+    for (int k = 0; k < 3; k++) acc[i][k] = w * f[i][k];
+    if (fend)
+      for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
+  };
+  if (replace)
+    set.each(atom->mask, atom->nlocal, set_to);
+  else
+    set.each(atom->mask, atom->nlocal, add);
 }
 
 /* ---------------------------------------------------------------------- */

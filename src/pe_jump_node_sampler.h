@@ -92,6 +92,13 @@ namespace PEJump {
     int sum_nodes_in(Keep &, const Quadrature &rule, int first, int skip, double scale,
                      double offset, const FreeFlight &v, const AtomSet &set, int mask, double **acc,
                      double **fend, bool onto_acc);
+    // acc = sum_k w_k F(q_k) over the nodes k = first .. last of rule in
+    // order, the atoms of set moving on from node to node by free flight
+    // from where they are, scale c = from: q_k = x + (scale c_k - from) v
+    // (the others stay). Nothing is kept or put back: the atoms stay at
+    // the last node, with its forces. Returns the number of nodes evaluated.
+    int walk_nodes(const Quadrature &rule, int first, int last, double scale, double from,
+                   const FreeFlight &v, const AtomSet &set, int mask, double **acc);
     // the positions a Keep keeps for sum_nodes() over set: those that the
     // first node moves, or all owned atoms for a group other than all
     // without a list
@@ -169,6 +176,9 @@ namespace PEJump {
     int eflag_step, vflag_step;
     void make_room();
     bool forces_dumped() const;
+    // acc += w f (acc = w f if replace) for the atoms of set; fend (if
+    // given) = f
+    void add_node(double w, const AtomSet &set, double **acc, bool replace, double **fend) const;
   };
 
 }    // namespace PEJump

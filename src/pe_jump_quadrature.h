@@ -68,16 +68,17 @@ namespace PEJump {
     // the terms of the quadrature sum known once the primary node is
     // evaluated, for one atom: sum = w_p fp (+ w_0 fstart with a reused
     // start node, whose forces then become fp, the next step's start; an
-    // unset start, NaN, takes fp)
+    // unset start, NaN, takes fp); onto: added to the other nodes' terms
+    // in sum
     struct StartSum {
       double wp, w0;
-      bool reuse;
+      bool reuse, onto;
       void operator()(const double *fp, double *fstart, double *sum) const
       {
         if (reuse && std::isnan(fstart[0]))
           for (int k = 0; k < 3; k++) fstart[k] = fp[k];
         for (int k = 0; k < 3; k++) {
-          sum[k] = wp * fp[k];
+          sum[k] = onto ? sum[k] + wp * fp[k] : wp * fp[k];
           if (reuse) {
             sum[k] += w0 * fstart[k];
             fstart[k] = fp[k];
@@ -85,7 +86,10 @@ namespace PEJump {
         }
       }
     };
-    StartSum start_sum() const { return {weight[primary()], weight[0], reuses_start_node()}; }
+    StartSum start_sum(bool onto = false) const
+    {
+      return {weight[primary()], weight[0], reuses_start_node(), onto};
+    }
 
     // node used for the force evaluation that the MD loop does anyway:
     // the step end if it is a node, else the middle (or first past the

@@ -1421,8 +1421,9 @@ TEST(PEJumpAsync, AnAtomChangingClockAtEveryNodeConvergesAtSecondOrder)
    the kick of the scheme, [v]^n = h_new F(q^n)/m, which its first free
    flight x^n + c h_new (v^n + [v]^n/2) shows: for an atom that left the
    fine clock the coarse step itself (c = 1, seen at the step end), for
-   one that joined it the first fine step up to its primary node (c = 1/2
-   midpoint, 1 lobatto 3), seen by a bond style that records the positions
+   one that joined it the first fine step up to its first node (c = 1/2:
+   the midpoint rule's node, lobatto 3's middle node), seen by a bond style
+   that records the positions
    at every evaluation of the step. The kicks are compared with the forces
    at the node computed from scratch. With the midpoint rule the forces of
    the atoms that change clock come from two fine subsets, at less than
@@ -1466,7 +1467,9 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
 {
   const double hs = 0.05, hf = hs / 10;    // bonded_lattice(), K = 10
   for (const std::string rule : {"", " quadrature lobatto 3", " buffer 1"}) {
-    const double primary = (rule.find("lobatto") == std::string::npos) ? 0.5 : 1.0;
+    // the first node inside the first fine step: the midpoint rule's node,
+    // and the middle node that lobatto 3 evaluates on the way to the end
+    const double first_node = 0.5;
     Sim s(MPI_COMM_WORLD, false);
     moving_region(s, rule);
     recorded_bonds(s);
@@ -1507,7 +1510,7 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
       return d - prd[k] * std::round(d / prd[k]);
     };
     // the first evaluation of step 21 away from the node: the first fine
-    // step's primary node (those before: forces at the node)
+    // step's first node (those before: forces at the node)
     const std::map<int, std::pair<double, double>> *first = nullptr;
     for (const auto &seen : BondRecording::seen) {
       double moved = 0.0;
@@ -1534,9 +1537,9 @@ TEST(PEJumpAsync, AtomsChangingClockStartWithTheForcesAtTheNode)
     int changed = 0, joined = 0;
     for (int id = 1; id <= natoms; id++) {
       if (fine0[id] == fine1[id]) continue;
-      // free flight of c h: seen at the primary node of the first fine
+      // free flight of c h: seen at the first node of the first fine
       // step (joined) or at the end of the coarse step (left)
-      const double h = fine1[id] ? hf : hs, c = fine1[id] ? primary : 1.0;
+      const double h = fine1[id] ? hf : hs, c = fine1[id] ? first_node : 1.0;
       for (int k = 0; k < 2; k++) {
         const double x = fine1[id] ? ((k == 0) ? first->at(id).first : first->at(id).second)
                                    : s.x(id, k);
