@@ -7,9 +7,11 @@ pe_jump beside fix langevin (friction gamma, step h) is written as
 X_{n+1} = A X_n + b xi_n on the state (q^n, node velocity v^n, jump
 [v]^n, the Langevin force of the last step, and the damping's kept d and
 P), exactly as the fix does it: midpoint takes the Langevin force at the
-centre of the step with the free-flight velocity and applies it there;
-Lobatto rules take it at the step end and apply it half before and half
-after the node (velocity Verlet). The stationary covariance solves the
+centre of the step with the free-flight velocity and applies it there
+(fix pe_jump); "midpoint, centre velocity" takes it there with the free
+flight plus half the last step's Langevin impulse (fix pe_jump/async,
+CentreVelocity); Lobatto rules take it at the step end and apply it half
+before and half after the node (velocity Verlet). The stationary covariance solves the
 discrete Lyapunov equation S = A S A^T + b b^T; the printed temperature
 is S[v, v] (1 = exact). The pulls of the damping:
   own impulse  [v]^{n+1} = (2 - beta) h <a> - (1 - beta) [v]^n (earlier)
@@ -31,10 +33,11 @@ PULLS = {
 def step(rule, omega, h, gamma, beta, pull, s, xi):
     q, u, J, rlast, dlast, plast = s
     acc = lambda x: -omega * omega * x
-    if rule == "midpoint":
+    if rule.startswith("midpoint"):
         vh = u + J / 2
         qm = q + 0.5 * h * vh
-        r = -gamma * vh + np.sqrt(2 * gamma / h) * xi
+        seen = vh + 0.5 * h * rlast if rule == "midpoint, centre velocity" else vh
+        r = -gamma * seen + np.sqrt(2 * gamma / h) * xi
         avg = acc(qm)
         vh = vh + h * r
         q1 = qm + 0.5 * h * vh
@@ -66,7 +69,7 @@ def main():
     print(f"h = {h}, gamma = {gamma}, damp auto (beta = 1e-3): stationary T of one mode")
     print("| rule | h omega | own impulse | (3P - P')/4 |")
     print("|---|---|---|---|")
-    for rule in ["midpoint", "lobatto 3"]:
+    for rule in ["midpoint", "midpoint, centre velocity", "lobatto 3"]:
         for theta in [0.06, 0.24, 0.48, 0.96]:
             cells = [f"{temperature(rule, theta / h, h, gamma, 1e-3, p):.5f}" for p in PULLS]
             print(f"| {rule} | {theta} | " + " | ".join(cells) + " |")
