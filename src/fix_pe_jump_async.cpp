@@ -924,8 +924,8 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
   split->activate(InteractionSplit::FINE);
   sampler->only_touch(&moving);
   const bool walk = walks_inner_nodes();
-  if (walk) walk_inner_nodes(into);
-  move_moving(rule->node[rule->primary()] * h - (walk ? rule->node[rule->size() - 2] * h : into));
+  const double at = walk ? walk_inner_nodes(into) : into;
+  move_moving(rule->node[rule->primary()] * h - at);
   const bool at_end = tally->expected() && (clocks->done() + 1 == clocks->steps());
   sampler->compute(ForceSampler::ALL, at_end ? ENERGY_GLOBAL : 0, 0);
   if (at_end) tally->keep();
@@ -949,7 +949,8 @@ void FixPEJumpAsync::fine_step(bool next_ahead)
    a rule with end nodes and nodes between them (lobatto 3 and up): the
    atoms that move on fine steps go through the nodes between in order,
    from where they are in the step, before its primary node, the end
-   (nothing to keep and put back)
+   (nothing to keep and put back); returns the time into the step where
+   they then are
 ------------------------------------------------------------------------- */
 
 bool FixPEJumpAsync::walks_inner_nodes() const
@@ -959,13 +960,15 @@ bool FixPEJumpAsync::walks_inner_nodes() const
 
 /* ---------------------------------------------------------------------- */
 
-void FixPEJumpAsync::walk_inner_nodes(double into)
+double FixPEJumpAsync::walk_inner_nodes(double into)
 {
   const AtomList &moving = clock_assignment->moving_atoms;
+  const int last = rule->size() - 2;
   const int evaluated = node_sampler->walk_nodes(
-      *rule, rule->first_sampled(), rule->size() - 2, clocks->fine_step(), into, free_flight(),
+      *rule, rule->first_sampled(), last, clocks->fine_step(), into, free_flight(),
       group_atoms(&moving), opts->sample_mask, work->get(SUM));
   evals->step += evaluated * node_cost();
+  return rule->node[last] * clocks->fine_step();
 }
 
 /* ---------------------------------------------------------------------- */

@@ -180,7 +180,7 @@ class FixPEJumpAsync : public Fix {
   void hold_until(double t);    // the slow atoms outside fine interactions move to t
   void fine_quadrature_sum(bool walked);
   bool walks_inner_nodes() const;
-  void walk_inner_nodes(double into);
+  double walk_inner_nodes(double into);
   void finish_fine_step(double **favg, double ahead, double *mag);
   void keep_coarse_primary(double **fcoarse);
   double **coarse_forces_apart();
