@@ -73,6 +73,7 @@ using namespace FixConst;
 using PEJump::AtomState;
 using PEJump::CentreVelocity;
 using PEJump::ClockAssignment;
+using PEJump::flat;
 using PEJump::ForceSampler;
 using PEJump::InteractionSplit;
 using PEJump::NodeSampler;
@@ -976,10 +977,10 @@ double FixPEJumpAsync::walk_inner_nodes(double into)
 void FixPEJumpAsync::move_moving(double dt)
 {
   if (dt == 0.0) return;
-  double **x = atom->x;
-  double **v = atom->v;
+  double *x = flat(atom->x);
+  const double *v = flat(atom->v);
   for (const int i : clock_assignment->moving_atoms)
-    for (int k = 0; k < 3; k++) x[i][k] += dt * v[i][k];
+    for (int k = 3 * i; k < 3 * i + 3; k++) x[k] += dt * v[k];
 }
 
 /* ----------------------------------------------------------------------
@@ -990,11 +991,11 @@ void FixPEJumpAsync::move_moving(double dt)
 void FixPEJumpAsync::hold_until(double t)
 {
   const double dt = t - clocks->held();
-  double **x = atom->x;
-  double **v = atom->v;
+  double *x = flat(atom->x);
+  const double *v = flat(atom->v);
   if (dt != 0.0)
     for (const int i : clock_assignment->slow_held)
-      for (int k = 0; k < 3; k++) x[i][k] += dt * v[i][k];
+      for (int k = 3 * i; k < 3 * i + 3; k++) x[k] += dt * v[k];
   clocks->hold_at(t);
 }
 
@@ -1148,10 +1149,13 @@ void FixPEJumpAsync::finish_fine_step(double **favg, double ahead, double *mag)
                       damping->step(h, FINE_CLOCK));
   damping->done(FINE_CLOCK);
   const double on = rest + MAX(ahead, 0.0);
+  // (the slow atoms in fine interactions lie scattered among the others)
+  double *xf = flat(x), *faccf = flat(facc);
+  const double *vf = flat(v), *ff = flat(favg);
   for (const int i : clock_assignment->slow_moving)
-    for (int k = 0; k < 3; k++) {
-      x[i][k] += on * v[i][k];
-      facc[i][k] += h * favg[i][k];
+    for (int k = 3 * i; k < 3 * i + 3; k++) {
+      xf[k] += on * vf[k];
+      faccf[k] += h * ff[k];
     }
 }
 

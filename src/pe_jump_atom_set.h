@@ -21,6 +21,15 @@ namespace PEJump {
 
   using AtomList = std::vector<int>;
 
+  // The values of a per-atom array of rows of three (LAMMPS' x, v, f and
+  // the fixes' own, all allocated as one block) as one flat array: atom i's
+  // values are [3 i, 3 i + 3). A loop over a list of scattered atoms then
+  // reads no row pointer (a cache line of its own per atom)
+  inline double *flat(double **rows)
+  {
+    return rows ? rows[0] : nullptr;
+  }
+
   // The owned atoms of a fix group, or a list of them (local indices)
   struct AtomSet {
     int groupbit;
@@ -48,7 +57,9 @@ namespace PEJump {
     bool all_at_node = false;
     double operator()(int i, int k) const
     {
-      return (all_at_node || (at_node && at_node[i])) ? v[i][k] + 0.5 * jump[i][k] : v[i][k];
+      // (through the first row: see flat())
+      const int at = 3 * i + k;
+      return (all_at_node || (at_node && at_node[i])) ? v[0][at] + 0.5 * jump[0][at] : v[0][at];
     }
   };
 

@@ -28,6 +28,7 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "pe_jump_atom_set.h"
 #include "pe_jump_errors.h"
 #include "pe_jump_moving_ghosts.h"
 #include "timer.h"
@@ -219,8 +220,13 @@ void ForceSampler::clear_forces()
     return;
   }
   if (touched->nfirst > 0) memset(&f[0][0], 0, 3 * sizeof(double) * touched->nfirst);
-  for (const int i : *touched->after) f[i][0] = f[i][1] = f[i][2] = 0.0;
-  if (force->newton && (atom->nghost > 0))
+  double *fflat = flat(f);
+  for (const int i : *touched->after) fflat[3 * i] = fflat[3 * i + 1] = fflat[3 * i + 2] = 0.0;
+  if (!force->newton || (atom->nghost == 0)) return;
+  // (the ghosts whose forces go back to their owners)
+  if (touched->ghosts)
+    touched->ghosts->clear_forces();
+  else
     memset(&f[atom->nlocal][0], 0, 3 * sizeof(double) * atom->nghost);
 }
 

@@ -13,10 +13,13 @@
 
 #include "pe_jump_moving_ghosts.h"
 
+#include "pe_jump_atom_set.h"
+
 #include "atom.h"
 #include "atom_vec.h"
 #include "comm.h"
 #include "domain.h"
+#include "error.h"
 #include "fix.h"
 
 using namespace LAMMPS_NS;
@@ -40,6 +43,8 @@ void MovingGhosts::mark(const int *moving_owned)
   const int nlocal = atom->nlocal;
   moving.assign(nlocal + atom->nghost, 0);
   for (int i = 0; i < nlocal; i++) moving[i] = moving_owned[i];
+  sent.clear();
+  received.clear();
   mode = FLAGS;
   comm->forward_comm(fix, 3);
   mode = NONE;
@@ -63,18 +68,57 @@ void MovingGhosts::reverse()
   mode = NONE;
 }
 
+/* ---------------------------------------------------------------------- */
+
+void MovingGhosts::clear_forces()
+{
+  double *f = flat(atom->f);
+  for (const auto &message : received)
+    for (const int i : message.second) f[3 * i] = f[3 * i + 1] = f[3 * i + 2] = 0.0;
+}
+
+/* ----------------------------------------------------------------------
+   the moving atoms of a message, as mark() found them (nullptr for an
+   empty message)
+------------------------------------------------------------------------- */
+
+const std::vector<int> *MovingGhosts::of_send(int n, const int *list) const
+{
+  if (n == 0) return nullptr;
+  const auto found = sent.find(list);
+  if (found == sent.end())
+    error->one(FLERR, "Fix {}: a message of the fine steps that mark() did not see", fix->style);
+  return &found->second;
+}
+
+/* ---------------------------------------------------------------------- */
+
+const std::vector<int> *MovingGhosts::of_receive(int n, int first) const
+{
+  if (n == 0) return nullptr;
+  const auto found = received.find(first);
+  if (found == received.end())
+    error->one(FLERR, "Fix {}: a message of the fine steps that mark() did not see", fix->style);
+  return &found->second;
+}
+
 /* ----------------------------------------------------------------------
    forward: the flags, or the positions of the moving atoms of list with
    the periodic shift of the message (as AtomVec::pack_comm())
 ------------------------------------------------------------------------- */
 
-int MovingGhosts::pack_forward(int n, const int *list, double *buf, int pbc_flag,
-                               const int *pbc) const
+int MovingGhosts::pack_forward(int n, const int *list, double *buf, int pbc_flag, const int *pbc)
 {
   if (mode == FLAGS) {
-    for (int i = 0; i < n; i++) buf[i] = moving[list[i]];
+    std::vector<int> &atoms = sent[list];
+    for (int i = 0; i < n; i++) {
+      buf[i] = moving[list[i]];
+      if (moving[list[i]]) atoms.push_back(list[i]);
+    }
     return n;
   }
+  const std::vector<int> *atoms = of_send(n, list);
+  if (!atoms) return 0;
   double dx = 0.0, dy = 0.0, dz = 0.0;
   if (pbc_flag && !domain->triclinic) {
     dx = pbc[0] * domain->xprd;
@@ -85,14 +129,12 @@ int MovingGhosts::pack_forward(int n, const int *list, double *buf, int pbc_flag
     dy = pbc[1] * domain->yprd + pbc[3] * domain->yz;
     dz = pbc[2] * domain->zprd;
   }
-  double **x = atom->x;
+  const double *x = atom->x[0];
   int m = 0;
-  for (int i = 0; i < n; i++) {
-    const int j = list[i];
-    if (!moving[j]) continue;
-    buf[m++] = x[j][0] + dx;
-    buf[m++] = x[j][1] + dy;
-    buf[m++] = x[j][2] + dz;
+  for (const int j : *atoms) {
+    buf[m++] = x[3 * j] + dx;
+    buf[m++] = x[3 * j + 1] + dy;
+    buf[m++] = x[3 * j + 2] + dz;
   }
   return m;
 }
@@ -102,16 +144,21 @@ int MovingGhosts::pack_forward(int n, const int *list, double *buf, int pbc_flag
 void MovingGhosts::unpack_forward(int n, int first, const double *buf)
 {
   if (mode == FLAGS) {
-    for (int i = 0; i < n; i++) moving[first + i] = static_cast<int>(buf[i]);
+    std::vector<int> &ghosts = received[first];
+    for (int i = 0; i < n; i++) {
+      moving[first + i] = static_cast<int>(buf[i]);
+      if (moving[first + i]) ghosts.push_back(first + i);
+    }
     return;
   }
-  double **x = atom->x;
+  const std::vector<int> *ghosts = of_receive(n, first);
+  if (!ghosts) return;
+  double *x = atom->x[0];
   int m = 0;
-  for (int i = first; i < first + n; i++) {
-    if (!moving[i]) continue;
-    x[i][0] = buf[m++];
-    x[i][1] = buf[m++];
-    x[i][2] = buf[m++];
+  for (const int i : *ghosts) {
+    x[3 * i] = buf[m++];
+    x[3 * i + 1] = buf[m++];
+    x[3 * i + 2] = buf[m++];
   }
 }
 
@@ -122,13 +169,14 @@ void MovingGhosts::unpack_forward(int n, int first, const double *buf)
 
 int MovingGhosts::pack_reverse(int n, int first, double *buf) const
 {
-  double **f = atom->f;
+  const std::vector<int> *ghosts = of_receive(n, first);
+  if (!ghosts) return 0;
+  const double *f = atom->f[0];
   int m = 0;
-  for (int i = first; i < first + n; i++) {
-    if (!moving[i]) continue;
-    buf[m++] = f[i][0];
-    buf[m++] = f[i][1];
-    buf[m++] = f[i][2];
+  for (const int i : *ghosts) {
+    buf[m++] = f[3 * i];
+    buf[m++] = f[3 * i + 1];
+    buf[m++] = f[3 * i + 2];
   }
   return m;
 }
@@ -137,13 +185,13 @@ int MovingGhosts::pack_reverse(int n, int first, double *buf) const
 
 void MovingGhosts::unpack_reverse(int n, const int *list, const double *buf)
 {
-  double **f = atom->f;
+  const std::vector<int> *atoms = of_send(n, list);
+  if (!atoms) return;
+  double *f = atom->f[0];
   int m = 0;
-  for (int i = 0; i < n; i++) {
-    const int j = list[i];
-    if (!moving[j]) continue;
-    f[j][0] += buf[m++];
-    f[j][1] += buf[m++];
-    f[j][2] += buf[m++];
+  for (const int j : *atoms) {
+    f[3 * j] += buf[m++];
+    f[3 * j + 1] += buf[m++];
+    f[3 * j + 2] += buf[m++];
   }
 }

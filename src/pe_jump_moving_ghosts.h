@@ -16,6 +16,7 @@
 
 #include "pointers.h"
 
+#include <unordered_map>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -31,7 +32,11 @@ namespace PEJump {
   // those of every ghost as LAMMPS' own communication does. Each atom's
   // flag is sent to its ghost copies once after the lists are built or
   // the clocks change (mark()), so that sender and receiver agree on the
-  // atoms of each message. Atom styles that communicate more than x
+  // atoms of each message; both sides keep, per message, the atoms in it
+  // that move, so that a fine step's messages pass over those atoms only
+  // (a message is known by the send list it packs, or by the first ghost
+  // it fills, which LAMMPS keeps until the next borders()). Atom styles
+  // that communicate more than x
   // forward or f in reverse (per-atom torques, ...) are left to LAMMPS'
   // communication (usable() is false). The fix's pack/unpack functions
   // hand over to this part while active().
@@ -43,9 +48,10 @@ namespace PEJump {
     void mark(const int *moving_owned);    // the flags of the owned atoms (nlocal)
     void forward();
     void reverse();
+    void clear_forces();    // of the moving ghosts (those reverse() sends)
 
     bool active() const { return mode != NONE; }
-    int pack_forward(int n, const int *list, double *buf, int pbc_flag, const int *pbc) const;
+    int pack_forward(int n, const int *list, double *buf, int pbc_flag, const int *pbc);
     void unpack_forward(int n, int first, const double *buf);
     int pack_reverse(int n, int first, double *buf) const;
     void unpack_reverse(int n, const int *list, const double *buf);
@@ -54,6 +60,13 @@ namespace PEJump {
     Fix *fix;
     enum { NONE, FLAGS, POSITIONS, FORCES } mode;
     std::vector<int> moving;    // owned and ghost atoms: 1 if the atom moves on fine steps
+    // the moving atoms of each message: by its send list (the atoms it
+    // sends forward and gets forces of) and by its first ghost (the ghost
+    // copies it fills forward and sends forces from)
+    std::unordered_map<const int *, std::vector<int>> sent;
+    std::unordered_map<int, std::vector<int>> received;
+    const std::vector<int> *of_send(int n, const int *list) const;
+    const std::vector<int> *of_receive(int n, int first) const;
   };
 }    // namespace PEJump
 }    // namespace LAMMPS_NS

@@ -147,13 +147,14 @@ bool StabilityGuard::ends_checked(const Quadrature &rule, double lo, double hi, 
 double StabilityGuard::excursion(const AtomSet &set, const FreeFlight &vel, double **xhold,
                                  double lo, double hi) const
 {
-  double **x = atom->x;
+  const double *x = flat(atom->x);
+  const double *x0 = flat(xhold);
   double worst = 0.0;
   const auto one = [&](int i) {
     const double vhalf[3] = {vel(i, 0), vel(i, 1), vel(i, 2)};
     double dlo = 0.0, dhi = 0.0;
     for (int k = 0; k < 3; k++) {
-      const double a = x[i][k] - xhold[i][k];
+      const double a = x[3 * i + k] - x0[3 * i + k];
       dlo += (a + lo * vhalf[k]) * (a + lo * vhalf[k]);
       dhi += (a + hi * vhalf[k]) * (a + hi * vhalf[k]);
     }

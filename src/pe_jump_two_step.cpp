@@ -236,9 +236,10 @@ template <bool AHEAD, bool SIGN, bool DAMP>
 void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, double *mag,
                            const ParasiticDamping::Step *damp) const
 {
-  double **x = atom->x;
-  double **v = atom->v;
-  double **jmp_all = jump();
+  double *x = flat(atom->x);
+  double *v = flat(atom->v);
+  double *jmp_all = flat(jump());
+  const double *fav = flat(favg);
   double *sig = (SIGN && step.fingerprint) ? vsig() : nullptr;
   const bool ahead = !AHEAD || (step.ahead >= 0.0);
   const double *rmass = atom->rmass;
@@ -251,8 +252,8 @@ void TwoStep::jump_loop_as(const AtomSet &set, double **favg, const Loop &step, 
   double vv = mag[0], jj = mag[1];
   set.each(atom->mask, atom->nlocal, [&](int i) {
     const double dtfm = kick * (rmass ? 1.0 / rmass[i] : minv[type[i]]);
-    double *xi = x[i], *vi = v[i], *ji = jmp_all[i];
-    const double *fi = favg[i];
+    double *xi = x + 3 * i, *vi = v + 3 * i, *ji = jmp_all + 3 * i;
+    const double *fi = fav + 3 * i;
     double vh[3] = {vi[0], vi[1], vi[2]};
     double jmp[3] = {ji[0], ji[1], ji[2]};
     double xn[3], vnew[3];
