@@ -2,7 +2,7 @@
 # PE-JUMP benchmarks: every study that doc/benchmarks.md reports, with one
 # binary, then the report (doc/benchmarks.md and doc/bench_*.png).
 #
-#   bash bench/run_all.sh            full run (about 110 minutes on 2 cores)
+#   bash bench/run_all.sh            full run (about 2 hours on 2 cores)
 #   bash bench/run_all.sh --quick    bench.py's stages only, small systems (a few minutes)
 #   bash bench/run_all.sh --stages lj_cost,mpi     only these stages of bench.py (then the report)
 #   bash bench/run_all.sh --no-wait  do not wait for a quiet machine before timing
@@ -46,7 +46,7 @@ if [ -n "$only_bench" ]; then
 else
   # the scenes of pe_jump/async first, then the rest of bench.py's stages
   "$PY" bench/bench.py --stages chain,wave,lattice "$@"
-  "$PY" bench/cost/cost.py --label current --lmp "$LMP" --libdir "$bin" --reps 3 --ranks 1,2,4 \
+  "$PY" bench/cost/cost.py --label current --lmp "$LMP" --libdir "$bin" --reps 7 --ranks 1,2,4 \
     --scenes bonded,lj,springs,chain
   "$PY" bench/cost/cost.py --report --labels current --out bench/results/cost/report.md
   "$PY" bench/composite/composite.py --lmp "$LMP" --label full --reps 3 --variants inc10,inc01
