@@ -129,7 +129,7 @@ int MovingGhosts::pack_forward(int n, const int *list, double *buf, int pbc_flag
     dy = pbc[1] * domain->yprd + pbc[3] * domain->yz;
     dz = pbc[2] * domain->zprd;
   }
-  const double *x = atom->x[0];
+  const double *x = flat(atom->x);
   int m = 0;
   for (const int j : *atoms) {
     buf[m++] = x[3 * j] + dx;
@@ -153,7 +153,7 @@ void MovingGhosts::unpack_forward(int n, int first, const double *buf)
   }
   const std::vector<int> *ghosts = of_receive(n, first);
   if (!ghosts) return;
-  double *x = atom->x[0];
+  double *x = flat(atom->x);
   int m = 0;
   for (const int i : *ghosts) {
     x[3 * i] = buf[m++];
@@ -171,7 +171,7 @@ int MovingGhosts::pack_reverse(int n, int first, double *buf) const
 {
   const std::vector<int> *ghosts = of_receive(n, first);
   if (!ghosts) return 0;
-  const double *f = atom->f[0];
+  const double *f = flat(atom->f);
   int m = 0;
   for (const int i : *ghosts) {
     buf[m++] = f[3 * i];
@@ -187,7 +187,7 @@ void MovingGhosts::unpack_reverse(int n, const int *list, const double *buf)
 {
   const std::vector<int> *atoms = of_send(n, list);
   if (!atoms) return;
-  double *f = atom->f[0];
+  double *f = flat(atom->f);
   int m = 0;
   for (const int j : *atoms) {
     f[3 * j] += buf[m++];

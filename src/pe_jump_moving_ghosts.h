@@ -36,10 +36,10 @@ namespace PEJump {
   // that move, so that a fine step's messages pass over those atoms only
   // (a message is known by the send list it packs, or by the first ghost
   // it fills, which LAMMPS keeps until the next borders()). Atom styles
-  // that communicate more than x
-  // forward or f in reverse (per-atom torques, ...) are left to LAMMPS'
-  // communication (usable() is false). The fix's pack/unpack functions
-  // hand over to this part while active().
+  // that communicate more than x forward or f in reverse (per-atom
+  // torques, ...) are left to LAMMPS' communication (usable() is false).
+  // The fix's pack/unpack functions hand over to this part while
+  // active().
   class MovingGhosts : protected Pointers {
    public:
     MovingGhosts(class LAMMPS *, Fix *);
