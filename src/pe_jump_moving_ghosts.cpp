@@ -87,7 +87,10 @@ const std::vector<int> *MovingGhosts::of_send(int n, const int *list) const
   if (n == 0) return nullptr;
   const auto found = sent.find(list);
   if (found == sent.end())
-    error->one(FLERR, "Fix {}: a message of the fine steps that mark() did not see", fix->style);
+    error->one(
+        FLERR,
+        "Fix {}: a ghost message of the fine steps that MovingGhosts::mark() did not see (bug)",
+        fix->style);
   return &found->second;
 }
 
@@ -98,7 +101,10 @@ const std::vector<int> *MovingGhosts::of_receive(int n, int first) const
   if (n == 0) return nullptr;
   const auto found = received.find(first);
   if (found == received.end())
-    error->one(FLERR, "Fix {}: a message of the fine steps that mark() did not see", fix->style);
+    error->one(
+        FLERR,
+        "Fix {}: a ghost message of the fine steps that MovingGhosts::mark() did not see (bug)",
+        fix->style);
   return &found->second;
 }
 
