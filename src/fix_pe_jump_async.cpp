@@ -1109,14 +1109,14 @@ void FixPEJumpAsync::pre_force(int /*vflag*/)
 void FixPEJumpAsync::fine_quadrature_sum(bool walked)
 {
   const int p = rule->primary();
-  const bool reuse_start = rule->reuses_start_node();
-  double **f = atom->f;
-  double **fstart = two_step->fstart();
   double **fsum = work->get(SUM);
   const AtomList &moving = clock_assignment->moving_atoms;
 
   const auto begin = rule->start_sum(walked);
-  for (const int i : moving) begin(f[i], reuse_start ? fstart[i] : nullptr, fsum[i]);
+  const double *f = flat(atom->f);
+  double *sum = flat(fsum);
+  double *start = rule->reuses_start_node() ? flat(two_step->fstart()) : nullptr;
+  for (const int i : moving) begin(f + 3 * i, start ? start + 3 * i : nullptr, sum + 3 * i);
   const int first = rule->first_sampled();
   if (walked || (rule->size() - first <= 1)) return;
   const double h = clocks->fine_step();

@@ -198,14 +198,14 @@ int NodeSampler::sum_nodes_in(Keep & /*keep*/, const Quadrature &rule, int first
 int NodeSampler::walk_nodes(const Quadrature &rule, int first, int last, double scale, double from,
                             const FreeFlight &v, const AtomSet &set, int mask, double **acc)
 {
-  double **x = atom->x;
+  double *x = flat(atom->x);
   double at = from;
   for (int node = first; node <= last; node++) {
     const double dt = scale * rule.node[node] - at;
     // (a step begun ahead has its atoms at the first node already)
     if (dt != 0.0)
       set.each(atom->mask, atom->nlocal, [&](int i) {
-        for (int k = 0; k < 3; k++) x[i][k] += dt * v(i, k);
+        for (int k = 0; k < 3; k++) x[3 * i + k] += dt * v(i, k);
       });
     at = scale * rule.node[node];
     sampler->compute(mask, 0, 0);
@@ -220,18 +220,18 @@ int NodeSampler::walk_nodes(const Quadrature &rule, int first, int last, double 
 void NodeSampler::add_node(double w, const AtomSet &set, double **acc, bool replace,
                            double **fend) const
 {
-  double **f = atom->f;
+  // (the atoms of a fine step lie scattered: see flat())
+  const double *f = flat(atom->f);
+  double *sum = flat(acc), *end = flat(fend);
   const auto add = [&](int i) {
-    acc[i][0] += w * f[i][0];
-    acc[i][1] += w * f[i][1];
-    acc[i][2] += w * f[i][2];
-    if (fend)
-      for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
+    for (int k = 3 * i; k < 3 * i + 3; k++) sum[k] += w * f[k];
+    if (end)
+      for (int k = 3 * i; k < 3 * i + 3; k++) end[k] = f[k];
   };
   const auto set_to = [&](int i) {
-    for (int k = 0; k < 3; k++) acc[i][k] = w * f[i][k];
-    if (fend)
-      for (int k = 0; k < 3; k++) fend[i][k] = f[i][k];
+    for (int k = 3 * i; k < 3 * i + 3; k++) sum[k] = w * f[k];
+    if (end)
+      for (int k = 3 * i; k < 3 * i + 3; k++) end[k] = f[k];
   };
   if (replace)
     set.each(atom->mask, atom->nlocal, set_to);
