@@ -78,29 +78,18 @@ void MovingGhosts::clear_forces()
 }
 
 /* ----------------------------------------------------------------------
-   the moving atoms of a message, as mark() found them (nullptr for an
-   empty message)
+   the moving atoms of a message (known by key in messages), as mark()
+   found them (nullptr for an empty message)
 ------------------------------------------------------------------------- */
 
-const std::vector<int> *MovingGhosts::of_send(int n, const int *list) const
+template <typename Key>
+const std::vector<int> *
+MovingGhosts::atoms_of(const std::unordered_map<Key, std::vector<int>> &messages, Key key,
+                       int n) const
 {
   if (n == 0) return nullptr;
-  const auto found = sent.find(list);
-  if (found == sent.end())
-    error->one(
-        FLERR,
-        "Fix {}: a ghost message of the fine steps that MovingGhosts::mark() did not see (bug)",
-        fix->style);
-  return &found->second;
-}
-
-/* ---------------------------------------------------------------------- */
-
-const std::vector<int> *MovingGhosts::of_receive(int n, int first) const
-{
-  if (n == 0) return nullptr;
-  const auto found = received.find(first);
-  if (found == received.end())
+  const auto found = messages.find(key);
+  if (found == messages.end())
     error->one(
         FLERR,
         "Fix {}: a ghost message of the fine steps that MovingGhosts::mark() did not see (bug)",
@@ -123,7 +112,7 @@ int MovingGhosts::pack_forward(int n, const int *list, double *buf, int pbc_flag
     }
     return n;
   }
-  const std::vector<int> *atoms = of_send(n, list);
+  const std::vector<int> *atoms = atoms_of(sent, list, n);
   if (!atoms) return 0;
   double dx = 0.0, dy = 0.0, dz = 0.0;
   if (pbc_flag && !domain->triclinic) {
@@ -157,7 +146,7 @@ void MovingGhosts::unpack_forward(int n, int first, const double *buf)
     }
     return;
   }
-  const std::vector<int> *ghosts = of_receive(n, first);
+  const std::vector<int> *ghosts = atoms_of(received, first, n);
   if (!ghosts) return;
   double *x = flat(atom->x);
   int m = 0;
@@ -175,7 +164,7 @@ void MovingGhosts::unpack_forward(int n, int first, const double *buf)
 
 int MovingGhosts::pack_reverse(int n, int first, double *buf) const
 {
-  const std::vector<int> *ghosts = of_receive(n, first);
+  const std::vector<int> *ghosts = atoms_of(received, first, n);
   if (!ghosts) return 0;
   const double *f = flat(atom->f);
   int m = 0;
@@ -191,7 +180,7 @@ int MovingGhosts::pack_reverse(int n, int first, double *buf) const
 
 void MovingGhosts::unpack_reverse(int n, const int *list, const double *buf)
 {
-  const std::vector<int> *atoms = of_send(n, list);
+  const std::vector<int> *atoms = atoms_of(sent, list, n);
   if (!atoms) return;
   double *f = flat(atom->f);
   int m = 0;

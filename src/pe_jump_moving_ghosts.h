@@ -65,8 +65,9 @@ namespace PEJump {
     // copies it fills forward and sends forces from)
     std::unordered_map<const int *, std::vector<int>> sent;
     std::unordered_map<int, std::vector<int>> received;
-    const std::vector<int> *of_send(int n, const int *list) const;
-    const std::vector<int> *of_receive(int n, int first) const;
+    template <typename Key>
+    const std::vector<int> *atoms_of(const std::unordered_map<Key, std::vector<int>> &messages,
+                                     Key key, int n) const;
   };
 }    // namespace PEJump
 }    // namespace LAMMPS_NS
