@@ -35,8 +35,10 @@ time on a shared machine; its wall time, timing breakdown, evaluations and
 steps are divided by the stretch, i.e. given per the others' run length.
 --ranks 1,2,4 also runs the async/sync pairs (bonded, springs, chain) on 2
 and 4 MPI ranks (mpirun --oversubscribe). Every configuration runs --reps
-times, interleaved (all configurations once, then again); figures are
-medians. See bench/cost/README.md.
+times, interleaved (all configurations once, then again), the two runs of
+an async/sync pair adjacent and in alternating order; figures are medians,
+and the wall/eval target is judged by the median of the pairs' ratios.
+See bench/cost/README.md.
 """
 
 import argparse
@@ -121,9 +123,12 @@ TARGETS = [
 ]
 for _np in WALL_TARGET_RANKS:
     for _s, _q in ASYNC_PAIRS:
-        TARGETS.append((f"{_s}.async_{qkey(_q)}{rsfx(_np)}_wall_per_eval",
-                        f"{SCENE_TITLE[_s]}: async K=50 {_q} wall/eval ratio, {_np} rank{'s' if _np > 1 else ''}",
-                        "<=", 1.15))
+        # judged by the pairs: the study runs each async run right after its
+        # synchronous one, and the machine's speed drifts between rounds by
+        # up to a factor 1.6 (the ratio of the medians is shown beside it)
+        TARGETS.append((f"{_s}.async_{qkey(_q)}{rsfx(_np)}_wall_per_eval_paired",
+                        f"{SCENE_TITLE[_s]}: async K=50 {_q} wall/eval ratio, {_np} rank{'s' if _np > 1 else ''}, "
+                        "median of the repetitions' ratios", "<=", 1.15))
 TARGETS += [
     ("bonded.async_midpoint_speedup", "bonded lattice: async K=50 midpoint speed-up over sync", ">=", 5.0),
     ("bonded.async_lobatto3_speedup", "bonded lattice: async K=50 lobatto 3 speed-up over sync", ">=", 5.0),
@@ -147,9 +152,9 @@ for _s, _q in ASYNC_PAIRS:
         EXTRA.append((f"{_s}.async_{_k}{rsfx(_np)}_eval_ratio",
                       f"{SCENE_TITLE[_s]}: async/sync evaluations, {_q}, {_np} rank{'s' if _np > 1 else ''}"))
     for _np in (1, 2):
-        EXTRA.append((f"{_s}.async_{_k}{rsfx(_np)}_wall_per_eval_paired",
+        EXTRA.append((f"{_s}.async_{_k}{rsfx(_np)}_wall_per_eval",
                       f"{SCENE_TITLE[_s]}: async K=50 {_q} wall/eval, {_np} rank{'s' if _np > 1 else ''}, "
-                      "median of the repetitions' ratios"))
+                      "ratio of the medians"))
     EXTRA.append((f"{_s}.async_{_k}_speedup", f"{SCENE_TITLE[_s]}: async K=50 {_q} speed-up over sync, 1 rank"))
 
 
@@ -427,6 +432,27 @@ def derive(runs):
 
 # ------------------------------------------------------------------ measure
 
+def run_plan(scenes, ranks, rep):
+    """The runs of one repetition: on 1 rank every configuration, on more
+    ranks the async/sync pairs. The two runs of a pair are adjacent, the
+    synchronous one first in even repetitions and second in odd ones, so
+    that a drift of the machine's speed cancels in the paired ratios."""
+    plan = []
+    for np_ in ranks:
+        for cf in CONFIGS:
+            s, _, integ, q, _ = cf
+            if s not in scenes or (np_ > 1 and not in_pair(s, integ, q)):
+                continue
+            if integ == "async" and in_pair(s, integ, q):
+                continue    # runs with its synchronous partner
+            if integ == "pe_jump" and in_pair(s, integ, q):
+                partner = next(c for c in CONFIGS if c[0] == s and c[2] == "async" and c[3] == q)
+                plan += [(c, np_) for c in ((cf, partner) if rep % 2 == 0 else (partner, cf))]
+            else:
+                plan.append((cf, np_))
+    return plan
+
+
 def measure(args):
     global WORK_LABEL
     c = dict(QUICK if args.quick else FULL)
@@ -454,19 +480,14 @@ def measure(args):
     except Exception:
         head, dirty = "?", None
     sc = prepare(c, scenes)
-    # 1 rank: all configurations; more ranks: the async/sync pairs, the
-    # synchronous run of a pair right before the async one
-    plan = [(cf, 1) for cf in CONFIGS if cf[0] in scenes and 1 in ranks]
-    for np_ in ranks:
-        if np_ > 1:
-            plan += [(cf, np_) for cf in CONFIGS if cf[0] in scenes and in_pair(cf[0], cf[2], cf[3])]
+    plan = run_plan(scenes, ranks, 0)
     log(f"label {args.label}: {len(plan)} runs x {args.reps} repetitions, ranks {ranks}, binary {lmp}")
     runs = {cfg_id(s, n, np_): {"scene": s, "name": n, "integrator": i, "quad": q, "K": K, "np": np_,
                                 "reps": []}
             for (s, n, i, q, K), np_ in plan}
     t0 = time.time()
     for rep in range(args.reps):
-        for (s, n, i, q, K), np_ in plan:
+        for (s, n, i, q, K), np_ in run_plan(scenes, ranks, rep):
             r = run_one(sc[s], s, n, i, q, K, rep, np_)
             runs[cfg_id(s, n, np_)]["reps"].append(r)
             bd = r["breakdown"]
@@ -545,7 +566,8 @@ def report(args):
              "ranks. Evaluations: thermo `f_int[5]` at the last step (the fix sums the interactions over the "
              "ranks, so every rank reports the same count). 4 ranks are 4 processes on the 2 cores. "
              "'paired': the median over the repetitions of the ratio from the repetition's sync and async "
-             "run (run one after the other); 'min': from the fastest async and the fastest sync run.\n")
+             "run (run one after the other), which the target judges; 'min': from the fastest async and "
+             "the fastest sync run.\n")
     L.append("| label | scene | rule | ranks | evals sync | evals async | eval ratio | wall sync [s] | "
              "wall async [s] | speed-up | wall/eval | wall/eval paired | wall/eval min | 1-min load | target |")
     L.append("|" + "---|" * 15)
@@ -557,12 +579,12 @@ def report(args):
                 k = f"async_{qkey(q)}{rsfx(np_)}"
                 if f"{k}_wall_per_eval" not in f:
                     continue
-                wpe = f[f"{k}_wall_per_eval"]
+                wpe = f[f"{k}_wall_per_eval_paired"]
                 tgt = ("met" if wpe <= 1.15 else "**missed**") if np_ in WALL_TARGET_RANKS else "(no target)"
                 L.append(f"| {lab} | {SCENE_TITLE[s]} | {q} | {np_} | {fmt(f[k + '_evals_sync'], 1)} | "
                          f"{fmt(f[k + '_evals_async'], 1)} | {fmt(f[k + '_eval_ratio'])} | "
                          f"{fmt(f[k + '_wall_sync'])} | {fmt(f[k + '_wall_async'])} | {fmt(f[k + '_speedup'], 2)} | "
-                         f"**{fmt(wpe)}** | {fmt(f[k + '_wall_per_eval_paired'])} | {fmt(f.get(k + '_wall_per_eval_min'))} | "
+                         f"{fmt(f[k + '_wall_per_eval'])} | **{fmt(wpe)}** | {fmt(f.get(k + '_wall_per_eval_min'))} | "
                          f"{fmt(f.get(k + '_load1'), 2)} | "
                          f"{tgt} |")
     L.append("")
